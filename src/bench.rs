@@ -1,0 +1,120 @@
+//! Throughput benchmark: standard SPH on periodic boxes (a perturbed cubic lattice at rest
+//! with small random velocities), timed over whole steps (neighbour search, h iteration,
+//! gradients, forces, integration).
+
+use crate::case::Case;
+use serde::Serialize;
+use std::time::Instant;
+
+#[derive(Debug, Clone, Serialize)]
+pub struct BenchRow {
+    pub dimension: usize,
+    pub particles: usize,
+    pub kernel: String,
+    pub neighbours: f64,
+    pub steps: u64,
+    pub seconds: f64,
+    pub threads: usize,
+    pub particle_updates_per_second: f64,
+    pub force_pairs_per_second: f64,
+    pub all_pairs_per_second: f64,
+}
+
+/// Case text for an N-particle periodic box in dimension d.
+pub fn box_case(d: usize, n: usize, kernel: &str) -> String {
+    let side = (n as f64).powf(1.0 / d as f64).round().max(4.0);
+    let spacing = 1.0 / side;
+    let v = |x: f64| format!("[{}]", vec![format!("{x}"); d].join(", "));
+    let b = format!("[{}]", vec!["\"periodic\""; d].join(", "));
+    format!(
+        r#"
+[case]
+name = "bench-{d}d-{n}"
+dimension = {d}
+[domain]
+min = {min}
+max = {max}
+boundary = {b}
+[eos]
+type = "ideal-gas"
+gamma = 1.6666666666666667
+[kernel]
+name = "{kernel}"
+[scheme]
+name = "standard"
+[time]
+t_end = 1.0
+integrator = "leapfrog"
+[[region]]
+spacing = {spacing}
+density = 1.0
+pressure = 1.0
+[perturbation]
+amplitude = 0.1
+seed = 7
+"#,
+        min = v(0.0),
+        max = v(1.0),
+    )
+}
+
+pub fn run_one<const D: usize>(n: usize, steps: u64, kernel: &str) -> Result<BenchRow, String> {
+    let case = Case::parse(&box_case(D, n, kernel)).map_err(|e| e.0)?;
+    let mut sim = case.build::<D>().map_err(|e| e.0)?;
+    // warm-up step (allocations, first list build)
+    sim.step(f64::INFINITY).map_err(|e| e.to_string())?;
+    let mut force_pairs = 0u64;
+    let mut all_pairs = 0u64;
+    let t0 = Instant::now();
+    for _ in 0..steps {
+        sim.sys.stats.total_pairs = 0;
+        sim.step(f64::INFINITY).map_err(|e| e.to_string())?;
+        force_pairs += sim.sys.stats.force_pairs;
+        all_pairs += sim.sys.stats.total_pairs;
+    }
+    let secs = t0.elapsed().as_secs_f64();
+    let np = sim.sys.particles.len();
+    Ok(BenchRow {
+        dimension: D,
+        particles: np,
+        kernel: sim.sys.kernel.kernel.to_string_name(),
+        neighbours: sim.sys.stats.force_pairs as f64 / np as f64,
+        steps,
+        seconds: secs,
+        threads: rayon::current_num_threads(),
+        particle_updates_per_second: np as f64 * steps as f64 / secs,
+        force_pairs_per_second: force_pairs as f64 / secs,
+        all_pairs_per_second: all_pairs as f64 / secs,
+    })
+}
+
+pub fn run_table(sizes: &[usize], dims: &[usize], steps: u64, kernel: &str) -> Result<Vec<BenchRow>, String> {
+    let mut rows = Vec::new();
+    for &d in dims {
+        for &n in sizes {
+            let row = match d {
+                1 => run_one::<1>(n, steps, kernel)?,
+                2 => run_one::<2>(n, steps, kernel)?,
+                3 => run_one::<3>(n, steps, kernel)?,
+                _ => return Err(format!("--dims: must be 1, 2 or 3, got {d}")),
+            };
+            eprintln!("{}D N={} done in {:.2} s", row.dimension, row.particles, row.seconds);
+            rows.push(row);
+        }
+    }
+    Ok(rows)
+}
+
+pub fn format_table(rows: &[BenchRow]) -> String {
+    let mut s = String::from(
+        "| dim | particles | kernel | neighbours | threads | steps | particle-updates/s | force pairs/s | all pairs/s |\n|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        s.push_str(&format!(
+            "| {}D | {} | {} | {:.1} | {} | {} | {:.3e} | {:.3e} | {:.3e} |\n",
+            r.dimension, r.particles, r.kernel, r.neighbours, r.threads, r.steps,
+            r.particle_updates_per_second, r.force_pairs_per_second, r.all_pairs_per_second
+        ));
+    }
+    s
+}

@@ -1,0 +1,191 @@
+//! `sphfmu` command line: run and check case files, benchmark the solver.
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use sphfmu::case::Case;
+use sphfmu::runner::{run_case, Progress, RunError};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+const RUN_HELP: &str = "\
+Schemes (scheme.name): standard — traditional grad-h SPH, Monaghan–Gingold viscosity with \
+Balsara switch, optional artificial conductivity.
+Kernels (kernel.name): cubic-spline, quartic-spline, quintic-spline, septic-spline, \
+wendland-c2, wendland-c4, wendland-c6, sinc (kernel.sinc_n = 3..9).
+Integrators (time.integrator): leapfrog, ssp-rk3, crk-rk2.
+Exit codes: 0 done, 2 bad case file, 3 unstable run (snapshots so far kept), 4 I/O error.";
+
+#[derive(Parser)]
+#[command(name = "sphfmu", version, about = "Smoothed-particle hydrodynamics for co-simulation")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a case: snapshots (VTU, CSV), diagnostics.csv, summary.json, and for cases with a
+    /// [verify] table the L1 errors and profile.png against the exact solution.
+    #[command(after_help = RUN_HELP)]
+    Run {
+        /// Case file (TOML), e.g. models/sod.toml
+        case: PathBuf,
+        /// Output directory
+        #[arg(long, default_value = "out")]
+        out: PathBuf,
+        /// No progress bar
+        #[arg(long)]
+        quiet: bool,
+        /// Worker threads (default: all cores)
+        #[arg(long)]
+        threads: Option<usize>,
+    },
+    /// Validate a case file without running it.
+    Check {
+        case: PathBuf,
+        /// Also generate the particles and evaluate the initial state.
+        #[arg(long)]
+        build: bool,
+    },
+    /// Measure particle-updates/s and pair-interactions/s on periodic boxes.
+    Bench {
+        /// Particle counts
+        #[arg(long, value_delimiter = ',', default_values_t = vec![10_000usize, 100_000, 1_000_000])]
+        sizes: Vec<usize>,
+        /// Dimensions
+        #[arg(long, value_delimiter = ',', default_values_t = vec![2usize, 3])]
+        dims: Vec<usize>,
+        /// Steps per measurement
+        #[arg(long, default_value_t = 5)]
+        steps: u64,
+        /// Kernel name
+        #[arg(long, default_value = "cubic-spline")]
+        kernel: String,
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Write the table as JSON too
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
+}
+
+fn fail(code: u8, msg: impl std::fmt::Display) -> ExitCode {
+    eprintln!("sphfmu: {msg}");
+    ExitCode::from(code)
+}
+
+fn set_threads(threads: Option<usize>) -> Result<(), String> {
+    if let Some(n) = threads {
+        if n == 0 {
+            return Err("--threads: must be ≥ 1".into());
+        }
+        rayon::ThreadPoolBuilder::new().num_threads(n).build_global().map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return ExitCode::from(code);
+        }
+    };
+    match cli.command {
+        Command::Check { case, build } => match Case::load(&case) {
+            Ok(c) => {
+                if build {
+                    let r = match c.dimension() {
+                        1 => c.build::<1>().map(|s| s.sys.particles.len()),
+                        2 => c.build::<2>().map(|s| s.sys.particles.len()),
+                        _ => c.build::<3>().map(|s| s.sys.particles.len()),
+                    };
+                    match r {
+                        Ok(n) => println!("{}: ok ({}D, {n} particles)", case.display(), c.dimension()),
+                        Err(e) => return fail(2, format!("{}: {e}", case.display())),
+                    }
+                } else {
+                    println!("{}: ok", case.display());
+                }
+                ExitCode::SUCCESS
+            }
+            Err(e) => fail(2, e),
+        },
+        Command::Run { case, out, quiet, threads } => {
+            if let Err(e) = set_threads(threads) {
+                return fail(2, e);
+            }
+            let c = match Case::load(&case) {
+                Ok(c) => c,
+                Err(e) => return fail(2, e),
+            };
+            let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(1000) };
+            bar.set_style(
+                ProgressStyle::with_template("{bar:30} t={msg} [{elapsed_precise} < {eta_precise}]")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+            let mut last_draw = std::time::Instant::now();
+            let mut on = |p: &Progress| {
+                if last_draw.elapsed().as_millis() < 100 && p.time < p.t_end {
+                    return;
+                }
+                last_draw = std::time::Instant::now();
+                bar.set_position((1000.0 * p.time / p.t_end) as u64);
+                bar.set_message(format!(
+                    "{:.4e}/{:.4e} step {} dt {:.3e} N {} {:.3e} particles/s",
+                    p.time, p.t_end, p.step, p.dt, p.particles, p.rate
+                ));
+            };
+            let res = run_case(&c, &out, &mut on);
+            bar.finish_and_clear();
+            match res {
+                Ok(s) => {
+                    println!(
+                        "{}: {} particles, {} steps to t = {:.6}, {:.2} s, {:.3e} particle-updates/s",
+                        s.case, s.particles, s.steps, s.time, s.wall_seconds, s.particle_updates_per_second
+                    );
+                    let (e0, e1) = (s.initial.total_energy, s.last.total_energy);
+                    println!("total energy {:.12e} -> {:.12e} (relative change {:.3e})", e0, e1, (e1 - e0) / e0.abs().max(1e-300));
+                    if let Some(e) = s.shock_tube {
+                        println!(
+                            "L1 against the exact Riemann solution: rho {:.4e}, v {:.4e}, P {:.4e} ({} particles)",
+                            e.l1_density, e.l1_velocity, e.l1_pressure, e.particles
+                        );
+                    }
+                    if let Some(p) = s.plot {
+                        println!("profile plot: {}", p.display());
+                    }
+                    println!("output: {}", out.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    let code = e.exit_code() as u8;
+                    let msg = match &e {
+                        RunError::Solver(_) => format!("{e} (snapshots so far kept in {})", out.display()),
+                        _ => e.to_string(),
+                    };
+                    fail(code, msg)
+                }
+            }
+        }
+        Command::Bench { sizes, dims, steps, kernel, threads, json } => {
+            if let Err(e) = set_threads(threads) {
+                return fail(2, e);
+            }
+            match sphfmu::bench::run_table(&sizes, &dims, steps, &kernel) {
+                Ok(rows) => {
+                    println!("{}", sphfmu::bench::format_table(&rows));
+                    if let Some(p) = json {
+                        if let Err(e) = std::fs::write(&p, serde_json::to_string_pretty(&rows).unwrap_or_default()) {
+                            return fail(4, format!("{}: {e}", p.display()));
+                        }
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(2, e),
+            }
+        }
+    }
+}

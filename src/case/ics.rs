@@ -1,0 +1,240 @@
+//! Initial conditions: lattices filling regions, smoothed interfaces, random perturbations.
+
+use super::{Case, CaseError, Lattice, Region, Shape};
+use crate::domain::Domain;
+use crate::eos::Eos;
+use crate::particles::{Particles, Vector};
+
+/// Deterministic PRNG (SplitMix64) so a seed gives the same case on every platform and version.
+pub struct SplitMix64(u64);
+
+impl SplitMix64 {
+    pub fn new(seed: u64) -> Self {
+        Self(seed)
+    }
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    pub fn uniform(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+}
+
+/// Volume per particle of a lattice with nearest-neighbour spacing a.
+fn volume_per_particle(lattice: Lattice, d: usize, a: f64) -> f64 {
+    match (lattice, d) {
+        (_, 1) | (Lattice::Cubic, _) => a.powi(d as i32),
+        (Lattice::Hexagonal, 2) => 0.5 * 3f64.sqrt() * a * a,
+        (Lattice::Hexagonal, _) => a * a * a / 2f64.sqrt(),
+    }
+}
+
+/// Points of a lattice filling the box [lo, hi], spacings adjusted so the box holds an
+/// integer number of cells in each direction (periodic tiling stays exact).
+/// Returns the points and the actual volume per particle.
+fn lattice_points<const D: usize>(lattice: Lattice, lo: &[f64], hi: &[f64], a: f64) -> (Vec<Vector<D>>, f64) {
+    let len = |k: usize| hi[k] - lo[k];
+    let count = |l: f64, s: f64, even: bool| {
+        let mut n = (l / s).round().max(1.0) as usize;
+        if even && n % 2 == 1 {
+            n += 1;
+        }
+        n
+    };
+    let mut pts = Vec::new();
+    if lattice == Lattice::Cubic || D == 1 {
+        let mut n = [1usize; D];
+        let mut s = [0.0; D];
+        for k in 0..D {
+            n[k] = count(len(k), a, false);
+            s[k] = len(k) / n[k] as f64;
+        }
+        let total: usize = n.iter().product();
+        pts.reserve(total);
+        for lin in 0..total {
+            let mut r = lin;
+            let mut x = Vector::<D>::zeros();
+            for k in 0..D {
+                let i = r % n[k];
+                r /= n[k];
+                x[k] = lo[k] + (i as f64 + 0.5) * s[k];
+            }
+            pts.push(x);
+        }
+        return (pts, s.iter().product());
+    }
+    // Hexagonal rows along x, spaced √3/2·a in y (even row count for periodic tiling);
+    // in 3D hexagonal layers spaced a·√(2/3) in z, ABAB stacking (even layer count).
+    let nx = count(len(0), a, false);
+    let sx = len(0) / nx as f64;
+    let ny = count(len(1), 0.5 * 3f64.sqrt() * a, true);
+    let sy = len(1) / ny as f64;
+    let (nz, sz) = if D == 3 {
+        let nz = count(len(2), (2.0f64 / 3.0).sqrt() * a, true);
+        (nz, len(2) / nz as f64)
+    } else {
+        (1, 1.0)
+    };
+    for kz in 0..nz {
+        for jy in 0..ny {
+            for ix in 0..nx {
+                let mut x = Vector::<D>::zeros();
+                let layer_shift_x = if kz % 2 == 1 { 0.5 * sx } else { 0.0 };
+                let layer_shift_y = if kz % 2 == 1 { sy / 3.0 } else { 0.0 };
+                let row_shift = if jy % 2 == 1 { 0.5 * sx } else { 0.0 };
+                x[0] = lo[0] + (ix as f64 + 0.25) * sx + row_shift + layer_shift_x;
+                x[0] = lo[0] + (x[0] - lo[0]).rem_euclid(len(0));
+                x[1] = lo[1] + (jy as f64 + 0.5) * sy + layer_shift_y;
+                x[1] = lo[1] + (x[1] - lo[1]).rem_euclid(len(1));
+                if D == 3 {
+                    x[2] = lo[2] + (kz as f64 + 0.5) * sz;
+                }
+                pts.push(x);
+            }
+        }
+    }
+    let vol = if D == 3 { sx * sy * sz } else { sx * sy };
+    (pts, vol)
+}
+
+fn inside<const D: usize>(case: &Case, r: &Region, x: &Vector<D>) -> bool {
+    match r.shape {
+        Shape::Box => {
+            let (lo, hi) = case.region_box(r);
+            (0..D).all(|k| x[k] >= lo[k] && x[k] < hi[k])
+        }
+        Shape::Sphere => {
+            let c = r.center.as_ref().expect("validated");
+            let rad = r.radius.expect("validated");
+            (0..D).map(|k| (x[k] - c[k]).powi(2)).sum::<f64>() < rad * rad
+        }
+    }
+}
+
+/// Index of the last region containing x (later regions win).
+fn region_at<const D: usize>(case: &Case, x: &Vector<D>) -> Option<usize> {
+    (0..case.regions.len()).rev().find(|&i| inside(case, &case.regions[i], x))
+}
+
+/// Primitive state (ρ, P or u, v) a region prescribes at x.
+struct State<const D: usize> {
+    rho: f64,
+    u: f64,
+    vel: Vector<D>,
+}
+
+fn state_of<const D: usize>(case: &Case, r: &Region, x: &Vector<D>) -> State<D> {
+    let rho = r.density;
+    let u = match (r.pressure, r.internal_energy) {
+        (Some(p), _) => case.eos.internal_energy(rho, p),
+        (_, Some(u)) => u,
+        _ => 0.0,
+    };
+    let mut vel = Vector::<D>::zeros();
+    if let Some(v) = &r.velocity {
+        for k in 0..D {
+            vel[k] = v[k];
+        }
+    }
+    if let Some(vr) = r.radial_velocity {
+        let mut c = Vector::<D>::zeros();
+        if let Some(cc) = &r.radial_center {
+            for k in 0..D {
+                c[k] = cc[k];
+            }
+        }
+        let d = x - c;
+        let n = d.norm();
+        if n > 0.0 {
+            vel += d * (vr / n);
+        }
+    }
+    State { rho, u, vel }
+}
+
+/// Fill the regions with particles and set their state; see the case-file reference.
+pub fn generate_particles<const D: usize>(case: &Case, domain: &Domain<D>, eta: f64) -> Result<Particles<D>, CaseError> {
+    let mut p = Particles::<D>::default();
+    let mut spacing_of = Vec::new();
+    for (ri, r) in case.regions.iter().enumerate() {
+        let (mut lo, mut hi) = case.region_box(r);
+        // Clip to the domain on bounded axes.
+        for k in 0..D {
+            if domain.kind[k] != crate::domain::BoundaryKind::Open {
+                lo[k] = lo[k].max(domain.lo[k]);
+                hi[k] = hi[k].min(domain.hi[k]);
+            }
+        }
+        let a = match (r.spacing, r.particle_mass) {
+            (Some(s), _) => s,
+            (_, Some(m)) => {
+                // spacing whose volume per particle holds mass m at density ρ
+                let unit = volume_per_particle(r.lattice, D, 1.0);
+                (m / (r.density * unit)).powf(1.0 / D as f64)
+            }
+            _ => unreachable!("validated"),
+        };
+        let (pts, vol) = lattice_points::<D>(r.lattice, &lo, &hi, a);
+        let mass = r.density * vol;
+        let h = eta * vol.powf(1.0 / D as f64);
+        for x in pts {
+            if region_at(case, &x) != Some(ri) {
+                continue;
+            }
+            let s = state_of(case, r, &x);
+            p.push(mass, x, s.vel, s.u, s.rho, h, r.material);
+            spacing_of.push(vol.powf(1.0 / D as f64));
+        }
+    }
+    if p.is_empty() {
+        return Err(CaseError("region: the regions hold no particle inside the domain".into()));
+    }
+    if p.len() > crate::neighbours::MAX_PARTICLES {
+        return Err(CaseError(format!(
+            "region: {} particles exceed the limit of {}",
+            p.len(),
+            crate::neighbours::MAX_PARTICLES
+        )));
+    }
+    // Smoothed interfaces: blend the states on either side with a logistic profile.
+    for f in &case.interfaces {
+        for i in 0..p.len() {
+            let x = p.pos[i];
+            let mut xl = x;
+            let mut xr = x;
+            xl[f.axis] = f.position - 1e-9 * (1.0 + f.position.abs());
+            xr[f.axis] = f.position + 1e-9 * (1.0 + f.position.abs());
+            let (Some(il), Some(ir)) = (region_at(case, &xl), region_at(case, &xr)) else { continue };
+            if il == ir {
+                continue;
+            }
+            let (sl, sr) = (state_of(case, &case.regions[il], &x), state_of(case, &case.regions[ir], &x));
+            let w = 1.0 / (1.0 + (-(x[f.axis] - f.position) / f.width).exp());
+            let rho = sl.rho + (sr.rho - sl.rho) * w;
+            let pl = case.eos.pressure(sl.rho, sl.u);
+            let pr = case.eos.pressure(sr.rho, sr.u);
+            let pres = pl + (pr - pl) * w;
+            p.u[i] = match (case.regions[il].pressure, case.regions[ir].pressure) {
+                (Some(_), Some(_)) => case.eos.internal_energy(rho, pres),
+                _ => sl.u + (sr.u - sl.u) * w,
+            };
+            p.vel[i] = sl.vel + (sr.vel - sl.vel) * w;
+        }
+    }
+    if let Some(pert) = &case.perturbation {
+        let mut rng = SplitMix64::new(pert.seed);
+        for i in 0..p.len() {
+            let mut v = p.vel[i];
+            for k in 0..D {
+                p.pos[i][k] += pert.amplitude * spacing_of[i] * (2.0 * rng.uniform() - 1.0);
+            }
+            domain.enforce(&mut p.pos[i], &mut v);
+        }
+    }
+    Ok(p)
+}

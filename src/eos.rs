@@ -1,0 +1,132 @@
+//! Equations of state behind one trait.
+
+use serde::{Deserialize, Serialize};
+
+/// P(ρ, u) and the sound speed.
+pub trait Eos: Send + Sync {
+    fn pressure(&self, rho: f64, u: f64) -> f64;
+    fn sound_speed(&self, rho: f64, u: f64) -> f64;
+    /// Specific internal energy giving pressure P at density ρ (for initial conditions).
+    fn internal_energy(&self, rho: f64, p: f64) -> f64;
+    /// Adiabatic index where one exists (used by entropy diagnostics), else 1.
+    fn gamma(&self) -> f64;
+}
+
+/// Case-file form of the equation of state (`[eos]`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum EosConfig {
+    /// P = (γ−1) ρ u.
+    IdealGas { gamma: f64 },
+    /// P = c² ρ (u is carried but does not enter).
+    Isothermal { sound_speed: f64 },
+    /// Tait / stiffened liquid: P = B[(ρ/ρ0)^γ − 1] + P_bg with B = ρ0 c0²/γ.
+    Tait {
+        rho0: f64,
+        sound_speed: f64,
+        #[serde(default = "default_tait_gamma")]
+        gamma: f64,
+        #[serde(default)]
+        background_pressure: f64,
+    },
+    /// Stiffened gas: P = (γ−1) ρ u − γ P∞.
+    StiffenedGas { gamma: f64, p_inf: f64 },
+}
+
+fn default_tait_gamma() -> f64 {
+    7.0
+}
+
+impl EosConfig {
+    /// Check ranges; the error names the key and the allowed range.
+    pub fn validate(&self) -> Result<(), String> {
+        let pos = |name: &str, v: f64| -> Result<(), String> {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(format!("eos.{name}: must be a finite number > 0, got {v}"))
+            }
+        };
+        match *self {
+            EosConfig::IdealGas { gamma } | EosConfig::StiffenedGas { gamma, .. } => {
+                if !(gamma.is_finite() && gamma > 1.0 && gamma <= 10.0) {
+                    return Err(format!("eos.gamma: must be in (1, 10], got {gamma}"));
+                }
+                if let EosConfig::StiffenedGas { p_inf, .. } = *self {
+                    if !(p_inf.is_finite() && p_inf >= 0.0) {
+                        return Err(format!("eos.p_inf: must be a finite number ≥ 0, got {p_inf}"));
+                    }
+                }
+                Ok(())
+            }
+            EosConfig::Isothermal { sound_speed } => pos("sound_speed", sound_speed),
+            EosConfig::Tait {
+                rho0,
+                sound_speed,
+                gamma,
+                background_pressure,
+            } => {
+                pos("rho0", rho0)?;
+                pos("sound_speed", sound_speed)?;
+                if !(gamma.is_finite() && (1.0..=10.0).contains(&gamma)) {
+                    return Err(format!("eos.gamma: must be in [1, 10], got {gamma}"));
+                }
+                if !background_pressure.is_finite() {
+                    return Err("eos.background_pressure: must be finite".into());
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+impl Eos for EosConfig {
+    #[inline]
+    fn pressure(&self, rho: f64, u: f64) -> f64 {
+        match *self {
+            EosConfig::IdealGas { gamma } => (gamma - 1.0) * rho * u,
+            EosConfig::Isothermal { sound_speed } => sound_speed * sound_speed * rho,
+            EosConfig::Tait {
+                rho0,
+                sound_speed,
+                gamma,
+                background_pressure,
+            } => {
+                let b = rho0 * sound_speed * sound_speed / gamma;
+                b * ((rho / rho0).powf(gamma) - 1.0) + background_pressure
+            }
+            EosConfig::StiffenedGas { gamma, p_inf } => (gamma - 1.0) * rho * u - gamma * p_inf,
+        }
+    }
+    #[inline]
+    fn sound_speed(&self, rho: f64, u: f64) -> f64 {
+        match *self {
+            EosConfig::IdealGas { gamma } => (gamma * (gamma - 1.0) * u.max(0.0)).sqrt(),
+            EosConfig::Isothermal { sound_speed } => sound_speed,
+            EosConfig::Tait {
+                rho0,
+                sound_speed,
+                gamma,
+                ..
+            } => sound_speed * (rho / rho0).powf(0.5 * (gamma - 1.0)),
+            EosConfig::StiffenedGas { gamma, p_inf } => {
+                let p = (gamma - 1.0) * rho * u - gamma * p_inf;
+                (gamma * (p + p_inf).max(0.0) / rho).sqrt()
+            }
+        }
+    }
+    fn internal_energy(&self, rho: f64, p: f64) -> f64 {
+        match *self {
+            EosConfig::IdealGas { gamma } => p / ((gamma - 1.0) * rho),
+            EosConfig::StiffenedGas { gamma, p_inf } => (p + gamma * p_inf) / ((gamma - 1.0) * rho),
+            EosConfig::Isothermal { .. } | EosConfig::Tait { .. } => 0.0,
+        }
+    }
+    fn gamma(&self) -> f64 {
+        match *self {
+            EosConfig::IdealGas { gamma } | EosConfig::StiffenedGas { gamma, .. } => gamma,
+            EosConfig::Tait { gamma, .. } => gamma,
+            EosConfig::Isothermal { .. } => 1.0,
+        }
+    }
+}

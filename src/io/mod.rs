@@ -1,0 +1,118 @@
+//! Output files: VTU snapshots (ParaView), CSV snapshots, the diagnostics time series, PNG plots.
+
+pub mod plot;
+
+use crate::particles::Particles;
+use crate::sim::Diagnostics;
+use std::fmt::Write as _;
+use std::io::{self, Write};
+use std::path::Path;
+
+fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, bytes)?;
+    std::fs::rename(tmp, path)
+}
+
+/// Snapshot as a VTU unstructured grid: one vertex cell per particle, fields as point data
+/// (ASCII, so any ParaView or meshio opens it without a reader plug-in).
+pub fn write_vtu<const D: usize>(path: &Path, p: &Particles<D>, time: f64) -> io::Result<()> {
+    let n = p.len();
+    let mut s = String::with_capacity(n * 200);
+    s.push_str("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n<UnstructuredGrid>\n");
+    let _ = writeln!(s, "<FieldData><DataArray type=\"Float64\" Name=\"TIME\" NumberOfTuples=\"1\" format=\"ascii\">{time:e}</DataArray></FieldData>");
+    let _ = writeln!(s, "<Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{n}\">");
+    s.push_str("<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
+    for x in &p.pos {
+        let c: Vec<f64> = (0..3).map(|k| if k < D { x[k] } else { 0.0 }).collect();
+        let _ = writeln!(s, "{:e} {:e} {:e}", c[0], c[1], c[2]);
+    }
+    s.push_str("</DataArray></Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
+    for i in 0..n {
+        let _ = write!(s, "{i} ");
+    }
+    s.push_str("\n</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
+    for i in 0..n {
+        let _ = write!(s, "{} ", i + 1);
+    }
+    s.push_str("\n</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
+    for _ in 0..n {
+        s.push_str("1 ");
+    }
+    s.push_str("\n</DataArray>\n</Cells>\n<PointData Scalars=\"density\" Vectors=\"velocity\">\n");
+    s.push_str("<DataArray type=\"Float64\" Name=\"velocity\" NumberOfComponents=\"3\" format=\"ascii\">\n");
+    for v in &p.vel {
+        let c: Vec<f64> = (0..3).map(|k| if k < D { v[k] } else { 0.0 }).collect();
+        let _ = writeln!(s, "{:e} {:e} {:e}", c[0], c[1], c[2]);
+    }
+    s.push_str("</DataArray>\n");
+    let scalars: [(&str, &Vec<f64>); 6] = [
+        ("density", &p.rho),
+        ("pressure", &p.pressure),
+        ("internal_energy", &p.u),
+        ("smoothing_length", &p.h),
+        ("mass", &p.mass),
+        ("sound_speed", &p.sound_speed),
+    ];
+    for (name, data) in scalars {
+        let _ = writeln!(s, "<DataArray type=\"Float64\" Name=\"{name}\" format=\"ascii\">");
+        for v in data.iter() {
+            let _ = write!(s, "{v:e} ");
+        }
+        s.push_str("\n</DataArray>\n");
+    }
+    s.push_str("<DataArray type=\"UInt32\" Name=\"id\" format=\"ascii\">\n");
+    for v in &p.id {
+        let _ = write!(s, "{v} ");
+    }
+    s.push_str("\n</DataArray>\n<DataArray type=\"UInt16\" Name=\"material\" format=\"ascii\">\n");
+    for v in &p.material {
+        let _ = write!(s, "{v} ");
+    }
+    s.push_str("\n</DataArray>\n</PointData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
+    write_atomic(path, s.as_bytes())
+}
+
+/// Snapshot as CSV with columns x,y,z,vx,vy,vz,m,h,rho,u,P,cs,id,material (sarracen/pandas names).
+pub fn write_csv<const D: usize>(path: &Path, p: &Particles<D>) -> io::Result<()> {
+    let mut s = String::with_capacity(p.len() * 160);
+    s.push_str("x,y,z,vx,vy,vz,m,h,rho,u,P,cs,id,material\n");
+    for i in 0..p.len() {
+        let x = |k: usize| if k < D { p.pos[i][k] } else { 0.0 };
+        let v = |k: usize| if k < D { p.vel[i][k] } else { 0.0 };
+        let _ = writeln!(
+            s,
+            "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{}",
+            x(0), x(1), x(2), v(0), v(1), v(2),
+            p.mass[i], p.h[i], p.rho[i], p.u[i], p.pressure[i], p.sound_speed[i], p.id[i], p.material[i]
+        );
+    }
+    write_atomic(path, s.as_bytes())
+}
+
+/// Diagnostics time series, one CSV row per record, flushed as it goes so an aborted run
+/// keeps everything written so far.
+pub struct DiagnosticsWriter {
+    file: io::BufWriter<std::fs::File>,
+}
+
+impl DiagnosticsWriter {
+    pub const HEADER: &'static str = "time,step,dt,particles,mass,px,py,pz,Lx,Ly,Lz,kinetic,internal,total";
+
+    pub fn create(path: &Path) -> io::Result<Self> {
+        let mut file = io::BufWriter::new(std::fs::File::create(path)?);
+        writeln!(file, "{}", Self::HEADER)?;
+        Ok(Self { file })
+    }
+
+    pub fn record(&mut self, d: &Diagnostics) -> io::Result<()> {
+        writeln!(
+            self.file,
+            "{:.17e},{},{:.17e},{},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e}",
+            d.time, d.step, d.dt, d.particles, d.mass, d.momentum[0], d.momentum[1], d.momentum[2],
+            d.angular_momentum[0], d.angular_momentum[1], d.angular_momentum[2],
+            d.kinetic_energy, d.internal_energy, d.total_energy
+        )?;
+        self.file.flush()
+    }
+}

@@ -1,0 +1,70 @@
+//! PNG plots of 1D profiles (particles against an exact curve), drawn with plotters and the
+//! DejaVu font bytes from the `dejavu` crate, so no system font library is needed.
+
+use plotters::prelude::*;
+use std::path::Path;
+
+/// One panel: particle values as dots, the reference as a line.
+pub struct Panel<'a> {
+    pub title: &'a str,
+    pub particles: &'a [(f64, f64)],
+    pub exact: &'a [(f64, f64)],
+}
+
+fn register_font() {
+    // Registration is idempotent; plotters keeps the bytes in its own table.
+    let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+}
+
+fn bounds(pts: &[(f64, f64)], other: &[(f64, f64)]) -> (f64, f64, f64, f64) {
+    let all = pts.iter().chain(other.iter());
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    for &(x, y) in all {
+        if x.is_finite() && y.is_finite() {
+            x0 = x0.min(x);
+            x1 = x1.max(x);
+            y0 = y0.min(y);
+            y1 = y1.max(y);
+        }
+    }
+    let pad = 0.06 * (y1 - y0).max(1e-12);
+    (x0, x1.max(x0 + 1e-12), y0 - pad, y1 + pad)
+}
+
+/// Write a PNG with the panels stacked in a grid (2 columns).
+pub fn profile_png(path: &Path, caption: &str, panels: &[Panel<'_>]) -> Result<(), String> {
+    register_font();
+    let rows = panels.len().div_ceil(2) as u32;
+    let root = BitMapBackend::new(path, (1200, 40 + 380 * rows)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let root = root.titled(caption, ("sans-serif", 24)).map_err(|e| e.to_string())?;
+    let areas = root.split_evenly((rows as usize, 2));
+    for (panel, area) in panels.iter().zip(areas.iter()) {
+        let (x0, x1, y0, y1) = bounds(panel.particles, panel.exact);
+        let mut chart = ChartBuilder::on(area)
+            .caption(panel.title, ("sans-serif", 18))
+            .margin(12)
+            .x_label_area_size(32)
+            .y_label_area_size(60)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(|e| e.to_string())?;
+        chart.configure_mesh().x_desc("x").draw().map_err(|e| e.to_string())?;
+        chart
+            .draw_series(panel.particles.iter().map(|&(x, y)| Circle::new((x, y), 2, BLUE.filled())))
+            .map_err(|e| e.to_string())?
+            .label("sphfmu")
+            .legend(|(x, y)| Circle::new((x, y), 3, BLUE.filled()));
+        chart
+            .draw_series(LineSeries::new(panel.exact.iter().copied(), RED.stroke_width(2)))
+            .map_err(|e| e.to_string())?
+            .label("exact")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED.stroke_width(2)));
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| e.to_string())?;
+    }
+    root.present().map_err(|e| e.to_string())
+}

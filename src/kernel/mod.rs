@@ -1,0 +1,242 @@
+//! Smoothing kernels.
+//!
+//! Convention (Rosswog spec §4.1): every kernel is stretched to a support of **2h**, so
+//! `W(r, h) = σ_D / h^D · w(q)` with `q = r/h ∈ [0, 2]`. A kernel whose native support is
+//! `l·h` is stretched with `w(q) = w_native(q·l/2)` and `σ_2h = (l/2)^D σ_lh`.
+//!
+//! Smoothing lengths are set from `h = η (m/ρ)^{1/D}`; the number of neighbours inside the
+//! support on a uniform distribution is then `4η` (1D), `4πη²` (2D), `(32π/3)η³` (3D), see
+//! [`neighbours_for_eta`]. Recommended η per kernel (Rosswog Table 3, "η used"): M4 1.2,
+//! M5 1.4, M6 1.6, W7 2.0, Wendland C2 1.6, C4 1.9, C6 2.2, W_H,n as in Table 3.
+//!
+//! CRKSPH's `n_h` convention (CRKSPH spec §1.4): `h_crk = Δx·n_h` with the kernel's native
+//! support `η_max·h_crk`; the number of *radial* neighbours is `η_max·n_h`. Stretched to our 2h
+//! support the same kernel has radial neighbours `2η`, so `η = η_max·n_h/2` (W7 with n_h = 1
+//! gives η = 2: 4 radial neighbours, as the paper's comparisons fix).
+
+mod bspline;
+mod sinc;
+mod wendland;
+
+pub use bspline::{CubicSplineM4, QuarticSplineM5, QuinticSplineM6, SepticSplineW7};
+pub use sinc::SincKernel;
+pub use wendland::{WendlandC2, WendlandC4, WendlandC6};
+
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// Support radius in units of h, shared by every kernel (all stretched to 2h).
+pub const SUPPORT: f64 = 2.0;
+
+/// A radial smoothing kernel in the stretched-to-2h convention.
+pub trait Kernel: Send + Sync {
+    /// Unnormalised shape `w(q)` and its derivative `dw/dq` for `q = r/h ≥ 0` (zero for q ≥ 2).
+    fn shape(&self, q: f64) -> (f64, f64);
+    /// Normalisation σ_D for the stretched kernel in dimension `dim` (1, 2 or 3).
+    fn sigma(&self, dim: usize) -> f64;
+    /// The η this kernel is meant to run with (Rosswog Table 3 / CRKSPH Table D.1 mapping).
+    fn default_eta(&self) -> f64;
+    /// Display name.
+    fn name(&self) -> String;
+}
+
+/// Stretch factor helper: σ of a kernel natively supported on `l·h`, stretched to 2h.
+pub(crate) fn stretched_sigma(sigma_native: f64, native_support: f64, dim: usize) -> f64 {
+    sigma_native * (native_support / SUPPORT).powi(dim as i32)
+}
+
+/// Kernel selection as it appears in case files (`kernel.name`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum KernelName {
+    /// Cubic B-spline M4.
+    CubicSpline,
+    /// Quartic B-spline M5.
+    QuarticSpline,
+    /// Quintic B-spline M6.
+    QuinticSpline,
+    /// Septic B-spline W7 (CRKSPH default).
+    SepticSpline,
+    WendlandC2,
+    WendlandC4,
+    WendlandC6,
+    /// Sinc family W_H,n; the exponent comes from `kernel.sinc_n`.
+    Sinc,
+}
+
+pub const KERNEL_NAMES: &str =
+    "cubic-spline, quartic-spline, quintic-spline, septic-spline, wendland-c2, wendland-c4, wendland-c6, sinc";
+
+/// Runtime-chosen kernel. An enum rather than a trait object: the match is perfectly
+/// predicted inside a pair loop and lets the compiler inline each shape.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AnyKernel {
+    M4(CubicSplineM4),
+    M5(QuarticSplineM5),
+    M6(QuinticSplineM6),
+    W7(SepticSplineW7),
+    C2(WendlandC2),
+    C4(WendlandC4),
+    C6(WendlandC6),
+    Sinc(SincKernel),
+}
+
+impl AnyKernel {
+    /// Build from a case-file name; `sinc_n` is only used by the sinc family.
+    pub fn from_name(name: KernelName, sinc_n: u32) -> Result<Self, String> {
+        Ok(match name {
+            KernelName::CubicSpline => AnyKernel::M4(CubicSplineM4),
+            KernelName::QuarticSpline => AnyKernel::M5(QuarticSplineM5),
+            KernelName::QuinticSpline => AnyKernel::M6(QuinticSplineM6),
+            KernelName::SepticSpline => AnyKernel::W7(SepticSplineW7),
+            KernelName::WendlandC2 => AnyKernel::C2(WendlandC2),
+            KernelName::WendlandC4 => AnyKernel::C4(WendlandC4),
+            KernelName::WendlandC6 => AnyKernel::C6(WendlandC6),
+            KernelName::Sinc => AnyKernel::Sinc(SincKernel::new(sinc_n)?),
+        })
+    }
+
+    /// Display name (for tables).
+    pub fn to_string_name(&self) -> String {
+        Kernel::name(self)
+    }
+
+    /// Every kernel, for tests and tables.
+    pub fn all() -> Vec<AnyKernel> {
+        let mut v = vec![
+            AnyKernel::M4(CubicSplineM4),
+            AnyKernel::M5(QuarticSplineM5),
+            AnyKernel::M6(QuinticSplineM6),
+            AnyKernel::W7(SepticSplineW7),
+            AnyKernel::C2(WendlandC2),
+            AnyKernel::C4(WendlandC4),
+            AnyKernel::C6(WendlandC6),
+        ];
+        for n in 3..=9 {
+            v.push(AnyKernel::Sinc(SincKernel::new(n).expect("3..=9 is valid")));
+        }
+        v
+    }
+}
+
+macro_rules! dispatch {
+    ($self:ident, $k:ident => $e:expr) => {
+        match $self {
+            AnyKernel::M4($k) => $e,
+            AnyKernel::M5($k) => $e,
+            AnyKernel::M6($k) => $e,
+            AnyKernel::W7($k) => $e,
+            AnyKernel::C2($k) => $e,
+            AnyKernel::C4($k) => $e,
+            AnyKernel::C6($k) => $e,
+            AnyKernel::Sinc($k) => $e,
+        }
+    };
+}
+
+impl Kernel for AnyKernel {
+    #[inline(always)]
+    fn shape(&self, q: f64) -> (f64, f64) {
+        dispatch!(self, k => k.shape(q))
+    }
+    fn sigma(&self, dim: usize) -> f64 {
+        dispatch!(self, k => k.sigma(dim))
+    }
+    fn default_eta(&self) -> f64 {
+        dispatch!(self, k => k.default_eta())
+    }
+    fn name(&self) -> String {
+        dispatch!(self, k => k.name())
+    }
+}
+
+/// Value, radial derivative and h-derivative of W at one pair distance.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct KernelEval {
+    /// W(r, h)
+    pub w: f64,
+    /// ∂W/∂r (≤ 0); the gradient with respect to the first particle is `dwdr · r̂_ab`.
+    pub dwdr: f64,
+    /// ∂W/∂h = −σ/h^{D+1} [D w + q w'] (Rosswog spec §4.1), needed by the grad-h terms.
+    pub dwdh: f64,
+}
+
+/// A kernel bound to a dimension, with σ precomputed.
+#[derive(Debug, Clone, Copy)]
+pub struct DimKernel<const D: usize> {
+    pub kernel: AnyKernel,
+    sigma: f64,
+}
+
+impl<const D: usize> DimKernel<D> {
+    pub fn new(kernel: AnyKernel) -> Self {
+        Self {
+            kernel,
+            sigma: kernel.sigma(D),
+        }
+    }
+
+    /// Support radius for smoothing length h.
+    #[inline(always)]
+    pub fn radius(&self, h: f64) -> f64 {
+        SUPPORT * h
+    }
+
+    #[inline(always)]
+    fn hinv_pow(h: f64) -> f64 {
+        let hi = 1.0 / h;
+        match D {
+            1 => hi,
+            2 => hi * hi,
+            _ => hi * hi * hi,
+        }
+    }
+
+    /// W(r, h).
+    #[inline(always)]
+    pub fn w(&self, r: f64, h: f64) -> f64 {
+        let q = r / h;
+        if q >= SUPPORT {
+            return 0.0;
+        }
+        self.sigma * Self::hinv_pow(h) * self.kernel.shape(q).0
+    }
+
+    /// W, ∂W/∂r and ∂W/∂h at distance r.
+    #[inline(always)]
+    pub fn eval(&self, r: f64, h: f64) -> KernelEval {
+        let q = r / h;
+        if q >= SUPPORT {
+            return KernelEval::default();
+        }
+        let (w, dw) = self.kernel.shape(q);
+        let norm = self.sigma * Self::hinv_pow(h);
+        let hinv = 1.0 / h;
+        KernelEval {
+            w: norm * w,
+            dwdr: norm * hinv * dw,
+            dwdh: -norm * hinv * (D as f64 * w + q * dw),
+        }
+    }
+
+    /// W(0, h): the self-contribution.
+    #[inline(always)]
+    pub fn w0(&self, h: f64) -> f64 {
+        self.sigma * Self::hinv_pow(h) * self.kernel.shape(0.0).0
+    }
+
+    /// ∂W/∂h at r = 0 (self term of the grad-h sums).
+    #[inline(always)]
+    pub fn dwdh0(&self, h: f64) -> f64 {
+        -(D as f64) * self.w0(h) / h
+    }
+}
+
+/// Expected neighbours inside the 2h support for `h = η·Δx` on a uniform distribution.
+pub fn neighbours_for_eta(eta: f64, dim: usize) -> f64 {
+    match dim {
+        1 => 2.0 * SUPPORT * eta,
+        2 => PI * (SUPPORT * eta).powi(2),
+        _ => 4.0 / 3.0 * PI * (SUPPORT * eta).powi(3),
+    }
+}

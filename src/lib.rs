@@ -1,0 +1,19 @@
+//! sphfmu: a smoothed-particle hydrodynamics solver for co-simulation.
+//!
+//! One core, three faces (CLI, FMU, zenoh). Data flows one way: a case file
+//! ([`case`]) becomes a [`sim::Simulation`]; the simulation steps; the faces read its outputs.
+
+pub mod bench;
+pub mod case;
+pub mod domain;
+pub mod eos;
+pub mod integrate;
+pub mod io;
+pub mod kernel;
+pub mod neighbours;
+pub mod particles;
+pub mod runner;
+pub mod scheme;
+pub mod sim;
+pub mod system;
+pub mod verify;

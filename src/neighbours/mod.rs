@@ -1,0 +1,307 @@
+//! Neighbour search: a cell-linked grid (counting sort by cell, so particles in one cell are
+//! contiguous) rebuilt every evaluation, and compressed per-particle neighbour lists built in
+//! parallel. A pair (a, b) is listed when `|x_a − image(x_b)| < max(R_a, R_b)`, i.e. gather
+//! *and* scatter neighbours for variable h. Entries pack the neighbour index (low 27 bits)
+//! with the image code (high 5 bits: mirror ghosts of reflecting walls).
+
+use crate::domain::{BoundaryKind, Domain, ImageCode};
+use crate::particles::Vector;
+use rayon::prelude::*;
+
+const INDEX_BITS: u32 = 27;
+const INDEX_MASK: u32 = (1 << INDEX_BITS) - 1;
+/// Largest particle count a list can address.
+pub const MAX_PARTICLES: usize = INDEX_MASK as usize;
+
+#[inline(always)]
+pub fn pack(index: usize, code: ImageCode) -> u32 {
+    (index as u32) | ((code as u32) << INDEX_BITS)
+}
+
+#[inline(always)]
+pub fn unpack(entry: u32) -> (usize, ImageCode) {
+    ((entry & INDEX_MASK) as usize, (entry >> INDEX_BITS) as ImageCode)
+}
+
+/// Uniform cell grid over the particles' bounding box (the domain on periodic axes).
+#[derive(Debug, Clone)]
+pub struct CellGrid<const D: usize> {
+    origin: [f64; D],
+    cell: f64,
+    dims: [usize; D],
+    periodic: [bool; D],
+    /// Particle indices sorted by cell.
+    pub sorted: Vec<u32>,
+    /// `cell_start[c]..cell_start[c+1]` indexes `sorted` for cell c.
+    cell_start: Vec<u32>,
+}
+
+impl<const D: usize> Default for CellGrid<D> {
+    fn default() -> Self {
+        Self { origin: [0.0; D], cell: 1.0, dims: [1; D], periodic: [false; D], sorted: vec![], cell_start: vec![0, 0] }
+    }
+}
+
+impl<const D: usize> CellGrid<D> {
+    /// Build a grid whose cells are at least `cell_size` wide.
+    pub fn build(pos: &[Vector<D>], domain: &Domain<D>, cell_size: f64) -> Self {
+        let n = pos.len();
+        let mut lo = [f64::INFINITY; D];
+        let mut hi = [f64::NEG_INFINITY; D];
+        for x in pos {
+            for k in 0..D {
+                lo[k] = lo[k].min(x[k]);
+                hi[k] = hi[k].max(x[k]);
+            }
+        }
+        let mut periodic = [false; D];
+        for k in 0..D {
+            if domain.kind[k] == BoundaryKind::Periodic {
+                lo[k] = domain.lo[k];
+                hi[k] = domain.hi[k];
+                periodic[k] = true;
+            }
+            if n == 0 {
+                lo[k] = 0.0;
+                hi[k] = 1.0;
+            }
+        }
+        // Cap the cell count at ~2 cells per particle (sparse or far-flung particles).
+        let mut cell = cell_size.max(1e-300);
+        loop {
+            let total: f64 = (0..D)
+                .map(|k| ((hi[k] - lo[k]) / cell).floor().max(1.0))
+                .product();
+            if total <= 2.0 * n as f64 + 8.0 {
+                break;
+            }
+            cell *= 1.25;
+        }
+        let mut dims = [1usize; D];
+        for k in 0..D {
+            // Periodic: an integer number of cells exactly tiling the period, each ≥ cell.
+            dims[k] = ((hi[k] - lo[k]) / cell).floor().max(1.0) as usize;
+            if !periodic[k] {
+                dims[k] = (((hi[k] - lo[k]) / cell).floor() as usize + 1).max(1);
+            }
+        }
+        let mut grid = Self {
+            origin: lo,
+            cell,
+            dims,
+            periodic,
+            sorted: Vec::new(),
+            cell_start: Vec::new(),
+        };
+        let ncells: usize = dims.iter().product();
+        let cells: Vec<u32> = pos.par_iter().map(|x| grid.cell_of(x) as u32).collect();
+        let mut count = vec![0u32; ncells + 1];
+        for &c in &cells {
+            count[c as usize + 1] += 1;
+        }
+        for c in 0..ncells {
+            count[c + 1] += count[c];
+        }
+        let mut fill = count.clone();
+        let mut sorted = vec![0u32; n];
+        for (i, &c) in cells.iter().enumerate() {
+            sorted[fill[c as usize] as usize] = i as u32;
+            fill[c as usize] += 1;
+        }
+        grid.sorted = sorted;
+        grid.cell_start = count;
+        grid
+    }
+
+    #[inline(always)]
+    fn coord(&self, x: &Vector<D>, k: usize) -> isize {
+        let c = ((x[k] - self.origin[k]) / self.cell).floor() as isize;
+        if self.periodic[k] {
+            c.rem_euclid(self.dims[k] as isize)
+        } else {
+            c.clamp(0, self.dims[k] as isize - 1)
+        }
+    }
+
+    fn cell_of(&self, x: &Vector<D>) -> usize {
+        let mut c = 0usize;
+        for k in (0..D).rev() {
+            c = c * self.dims[k] + self.coord(x, k) as usize;
+        }
+        c
+    }
+
+    /// Visit every particle in cells that can hold points within `reach` of `x`
+    /// (reach ≤ cell size; each candidate visited once).
+    #[inline]
+    pub fn for_candidates(&self, x: &Vector<D>, mut f: impl FnMut(usize)) {
+        let mut ranges: [[isize; 3]; D] = [[0; 3]; D];
+        let mut counts = [0usize; D];
+        for k in 0..D {
+            let c = ((x[k] - self.origin[k]) / self.cell).floor() as isize;
+            let dk = self.dims[k] as isize;
+            let mut m = 0;
+            for off in -1..=1 {
+                let mut ci = c + off;
+                if self.periodic[k] {
+                    ci = ci.rem_euclid(dk);
+                } else if ci < 0 || ci >= dk {
+                    // Outside the grid: holds no particle (the grid spans them all).
+                    continue;
+                }
+                if !ranges[k][..m].contains(&ci) {
+                    ranges[k][m] = ci;
+                    m += 1;
+                }
+            }
+            if m == 0 {
+                return;
+            }
+            counts[k] = m;
+        }
+        let mut idx = [0usize; D];
+        loop {
+            let mut c = 0usize;
+            for k in (0..D).rev() {
+                c = c * self.dims[k] + ranges[k][idx[k]] as usize;
+            }
+            let (s, e) = (self.cell_start[c] as usize, self.cell_start[c + 1] as usize);
+            for &j in &self.sorted[s..e] {
+                f(j as usize);
+            }
+            let mut k = 0;
+            loop {
+                idx[k] += 1;
+                if idx[k] < counts[k] {
+                    break;
+                }
+                idx[k] = 0;
+                k += 1;
+                if k == D {
+                    return;
+                }
+            }
+        }
+    }
+}
+
+/// Compressed neighbour lists (CSR): neighbours of a are `entries[offsets[a]..offsets[a+1]]`.
+#[derive(Debug, Clone, Default)]
+pub struct NeighbourList {
+    pub offsets: Vec<usize>,
+    pub entries: Vec<u32>,
+}
+
+impl NeighbourList {
+    #[inline(always)]
+    pub fn of(&self, a: usize) -> &[u32] {
+        &self.entries[self.offsets[a]..self.offsets[a + 1]]
+    }
+    pub fn total_pairs(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Build lists for all particles: b is a neighbour of a (through image `code`) when
+    /// `|x_a − image(x_b)| < max(reach_a, reach_b)`. Self (a, code 0) is excluded; a particle's
+    /// own mirror image is included. `reach` must not exceed the grid's cell size.
+    pub fn build<const D: usize>(
+        pos: &[Vector<D>],
+        reach: &[f64],
+        domain: &Domain<D>,
+        grid: &CellGrid<D>,
+    ) -> Self {
+        let n = pos.len();
+        const CHUNK: usize = 512;
+        let parts: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|chunk| {
+                let start = chunk * CHUNK;
+                let end = (start + CHUNK).min(n);
+                let mut counts = Vec::with_capacity(end - start);
+                let mut out = Vec::with_capacity((end - start) * 32);
+                let mut codes = Vec::with_capacity(8);
+                for a in start..end {
+                    let before = out.len();
+                    let xa = pos[a];
+                    let ra = reach[a];
+                    domain.image_codes(&xa, grid.cell, &mut codes);
+                    for &code in &codes {
+                        let q = domain.image_position(&xa, code);
+                        grid.for_candidates(&q, |b| {
+                            if b == a && code == 0 {
+                                return;
+                            }
+                            let d = domain.separation(&xa, &pos[b], code);
+                            let r = ra.max(reach[b]);
+                            if d.norm_squared() < r * r {
+                                out.push(pack(b, code));
+                            }
+                        });
+                    }
+                    counts.push((out.len() - before) as u32);
+                }
+                (counts, out)
+            })
+            .collect();
+        let mut offsets = Vec::with_capacity(n + 1);
+        offsets.push(0usize);
+        let total: usize = parts.iter().map(|p| p.1.len()).sum();
+        let mut entries = Vec::with_capacity(total);
+        for (counts, out) in parts {
+            for c in counts {
+                offsets.push(offsets.last().unwrap() + c as usize);
+            }
+            entries.extend_from_slice(&out);
+        }
+        Self { offsets, entries }
+    }
+
+    /// Keep only the entries for which `keep(a, entry)` holds (used to drop the skin once
+    /// smoothing lengths have converged).
+    pub fn retain(&mut self, keep: impl Fn(usize, u32) -> bool + Sync) {
+        let n = self.offsets.len() - 1;
+        let lists: Vec<Vec<u32>> = (0..n)
+            .into_par_iter()
+            .map(|a| self.of(a).iter().copied().filter(|&e| keep(a, e)).collect())
+            .collect();
+        let mut offsets = Vec::with_capacity(n + 1);
+        offsets.push(0);
+        let mut entries = Vec::with_capacity(self.entries.len());
+        for l in lists {
+            entries.extend_from_slice(&l);
+            offsets.push(entries.len());
+        }
+        self.offsets = offsets;
+        self.entries = entries;
+    }
+}
+
+/// O(N²) reference: same rule as [`NeighbourList::build`], for tests. Lists come sorted.
+pub fn brute_force<const D: usize>(
+    pos: &[Vector<D>],
+    reach: &[f64],
+    domain: &Domain<D>,
+) -> Vec<Vec<u32>> {
+    let maxr = reach.iter().cloned().fold(0.0, f64::max);
+    let mut codes = Vec::new();
+    (0..pos.len())
+        .map(|a| {
+            let mut l = Vec::new();
+            domain.image_codes(&pos[a], maxr, &mut codes);
+            for &code in &codes {
+                for b in 0..pos.len() {
+                    if b == a && code == 0 {
+                        continue;
+                    }
+                    let d = domain.separation(&pos[a], &pos[b], code);
+                    let r = reach[a].max(reach[b]);
+                    if d.norm_squared() < r * r {
+                        l.push(pack(b, code));
+                    }
+                }
+            }
+            l.sort_unstable();
+            l
+        })
+        .collect()
+}

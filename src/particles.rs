@@ -1,0 +1,128 @@
+//! Structure-of-arrays particle storage, generic over the dimension D.
+
+use nalgebra::SVector;
+
+/// A D-vector of f64.
+pub type Vector<const D: usize> = SVector<f64, D>;
+
+/// Per-particle state. Evolved fields (x, v, u) and the fields every scheme derives each
+/// evaluation; schemes that need more register `extra_scalars` / `extra_vectors` slots, which
+/// move with the particles when they are reordered.
+#[derive(Debug, Clone, Default)]
+pub struct Particles<const D: usize> {
+    pub mass: Vec<f64>,
+    pub pos: Vec<Vector<D>>,
+    pub vel: Vec<Vector<D>>,
+    /// Specific internal energy u.
+    pub u: Vec<f64>,
+    pub rho: Vec<f64>,
+    pub pressure: Vec<f64>,
+    pub sound_speed: Vec<f64>,
+    /// Smoothing length (support is 2h).
+    pub h: Vec<f64>,
+    /// Material id (multi-material rules, output labelling).
+    pub material: Vec<u16>,
+    /// Stable particle id (survives reordering).
+    pub id: Vec<u32>,
+    /// dv/dt from the latest evaluation.
+    pub acc: Vec<Vector<D>>,
+    /// du/dt from the latest evaluation.
+    pub dudt: Vec<f64>,
+    /// Grad-h correction Ω (1 where a scheme has no grad-h terms).
+    pub omega: Vec<f64>,
+    /// Velocity divergence and |curl| (for switches and diagnostics).
+    pub div_v: Vec<f64>,
+    pub curl_v: Vec<f64>,
+    /// Largest pairwise signal speed seen by the particle in the latest evaluation.
+    pub v_sig: Vec<f64>,
+    /// Artificial-viscosity coefficient α (constant or switch-driven).
+    pub alpha: Vec<f64>,
+    pub extra_scalars: Vec<Vec<f64>>,
+    pub extra_vectors: Vec<Vec<Vector<D>>>,
+}
+
+impl<const D: usize> Particles<D> {
+    pub fn len(&self) -> usize {
+        self.mass.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.mass.is_empty()
+    }
+
+    /// Append one particle with the primary fields; derived fields start at zero.
+    #[allow(clippy::too_many_arguments)]
+    pub fn push(&mut self, m: f64, x: Vector<D>, v: Vector<D>, u: f64, rho: f64, h: f64, mat: u16) {
+        let id = self.mass.len() as u32;
+        self.mass.push(m);
+        self.pos.push(x);
+        self.vel.push(v);
+        self.u.push(u);
+        self.rho.push(rho);
+        self.pressure.push(0.0);
+        self.sound_speed.push(0.0);
+        self.h.push(h);
+        self.material.push(mat);
+        self.id.push(id);
+        self.acc.push(Vector::zeros());
+        self.dudt.push(0.0);
+        self.omega.push(1.0);
+        self.div_v.push(0.0);
+        self.curl_v.push(0.0);
+        self.v_sig.push(0.0);
+        self.alpha.push(0.0);
+        for s in &mut self.extra_scalars {
+            s.push(0.0);
+        }
+        for s in &mut self.extra_vectors {
+            s.push(Vector::zeros());
+        }
+    }
+
+    /// Register a scheme-specific scalar field; returns its slot.
+    pub fn add_scalar_field(&mut self, init: f64) -> usize {
+        self.extra_scalars.push(vec![init; self.len()]);
+        self.extra_scalars.len() - 1
+    }
+
+    /// Register a scheme-specific vector field; returns its slot.
+    pub fn add_vector_field(&mut self) -> usize {
+        self.extra_vectors.push(vec![Vector::zeros(); self.len()]);
+        self.extra_vectors.len() - 1
+    }
+
+    /// Reorder every per-particle array so that new index i holds old index `perm[i]`.
+    pub fn permute(&mut self, perm: &[u32]) {
+        fn ap<T: Copy>(v: &mut Vec<T>, perm: &[u32]) {
+            let out: Vec<T> = perm.iter().map(|&i| v[i as usize]).collect();
+            *v = out;
+        }
+        ap(&mut self.mass, perm);
+        ap(&mut self.pos, perm);
+        ap(&mut self.vel, perm);
+        ap(&mut self.u, perm);
+        ap(&mut self.rho, perm);
+        ap(&mut self.pressure, perm);
+        ap(&mut self.sound_speed, perm);
+        ap(&mut self.h, perm);
+        ap(&mut self.material, perm);
+        ap(&mut self.id, perm);
+        ap(&mut self.acc, perm);
+        ap(&mut self.dudt, perm);
+        ap(&mut self.omega, perm);
+        ap(&mut self.div_v, perm);
+        ap(&mut self.curl_v, perm);
+        ap(&mut self.v_sig, perm);
+        ap(&mut self.alpha, perm);
+        for s in &mut self.extra_scalars {
+            ap(s, perm);
+        }
+        for s in &mut self.extra_vectors {
+            ap(s, perm);
+        }
+    }
+
+    /// Total mass.
+    pub fn total_mass(&self) -> f64 {
+        self.mass.iter().sum()
+    }
+}

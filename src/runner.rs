@@ -1,0 +1,267 @@
+//! Running a case end to end: snapshots, diagnostics, verification against the exact
+//! solution named in the case's `[verify]` table. Shared by the CLI and the tests.
+
+use crate::case::{Case, CaseError, SnapshotFormat};
+use crate::io::{self, DiagnosticsWriter};
+use crate::sim::{Simulation, SolverError};
+use crate::verify::riemann::{ExactRiemann, Primitive};
+use crate::verify::{shock_tube_errors, ShockTubeErrors};
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Why a run failed, and the exit code the CLI uses for it.
+#[derive(Debug)]
+pub enum RunError {
+    /// Bad input: exit code 2.
+    Case(CaseError),
+    /// Instability or solver failure: exit code 3 (snapshots written so far are kept).
+    Solver(SolverError),
+    /// File-system problem: exit code 4.
+    Io(String),
+}
+
+impl RunError {
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            RunError::Case(_) => 2,
+            RunError::Solver(_) => 3,
+            RunError::Io(_) => 4,
+        }
+    }
+}
+
+impl fmt::Display for RunError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            RunError::Case(e) => write!(f, "{e}"),
+            RunError::Solver(e) => write!(f, "{e}"),
+            RunError::Io(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl From<CaseError> for RunError {
+    fn from(e: CaseError) -> Self {
+        RunError::Case(e)
+    }
+}
+impl From<SolverError> for RunError {
+    fn from(e: SolverError) -> Self {
+        RunError::Solver(e)
+    }
+}
+
+fn io_err(path: &Path, e: impl fmt::Display) -> RunError {
+    RunError::Io(format!("{}: {e}", path.display()))
+}
+
+/// Progress facts passed to the caller after every step.
+#[derive(Debug, Clone, Copy)]
+pub struct Progress {
+    pub time: f64,
+    pub t_end: f64,
+    pub step: u64,
+    pub dt: f64,
+    pub particles: usize,
+    /// particle-updates per second of wall time since the start
+    pub rate: f64,
+}
+
+/// What a finished run reports.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct RunSummary {
+    pub case: String,
+    pub dimension: usize,
+    pub particles: usize,
+    pub steps: u64,
+    pub time: f64,
+    pub wall_seconds: f64,
+    pub particle_updates_per_second: f64,
+    pub snapshots: Vec<PathBuf>,
+    pub initial: crate::sim::Diagnostics,
+    pub last: crate::sim::Diagnostics,
+    pub shock_tube: Option<ShockTubeErrors>,
+    pub plot: Option<PathBuf>,
+}
+
+/// Run `case` writing into `out`. `progress` is called after every step.
+pub fn run_case(case: &Case, out: &Path, progress: &mut dyn FnMut(&Progress)) -> Result<RunSummary, RunError> {
+    std::fs::create_dir_all(out).map_err(|e| io_err(out, e))?;
+    match case.dimension() {
+        1 => run_dim::<1>(case, out, progress),
+        2 => run_dim::<2>(case, out, progress),
+        _ => run_dim::<3>(case, out, progress),
+    }
+}
+
+struct Snapshots {
+    dir: PathBuf,
+    formats: Vec<SnapshotFormat>,
+    written: Vec<(f64, PathBuf)>,
+    files: Vec<PathBuf>,
+}
+
+impl Snapshots {
+    fn write<const D: usize>(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
+        let idx = self.written.len();
+        for f in &self.formats {
+            let path = match f {
+                SnapshotFormat::Vtu => self.dir.join(format!("snapshot_{idx:05}.vtu")),
+                SnapshotFormat::Csv => self.dir.join(format!("snapshot_{idx:05}.csv")),
+            };
+            match f {
+                SnapshotFormat::Vtu => io::write_vtu(&path, &sim.sys.particles, sim.time),
+                SnapshotFormat::Csv => io::write_csv(&path, &sim.sys.particles),
+            }
+            .map_err(|e| io_err(&path, e))?;
+            if *f == SnapshotFormat::Vtu {
+                self.written.push((sim.time, path.clone()));
+            }
+            self.files.push(path);
+        }
+        if !self.formats.contains(&SnapshotFormat::Vtu) {
+            self.written.push((sim.time, PathBuf::new()));
+        }
+        self.write_pvd()
+    }
+
+    /// ParaView collection so the snapshots open as one time series.
+    fn write_pvd(&self) -> Result<(), RunError> {
+        if !self.formats.contains(&SnapshotFormat::Vtu) {
+            return Ok(());
+        }
+        let mut s = String::from("<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n");
+        for (t, p) in &self.written {
+            let name = p.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
+            s.push_str(&format!("<DataSet timestep=\"{t:e}\" part=\"0\" file=\"{name}\"/>\n"));
+        }
+        s.push_str("</Collection>\n</VTKFile>\n");
+        let path = self.dir.join("snapshots.pvd");
+        std::fs::write(&path, s).map_err(|e| io_err(&path, e))
+    }
+}
+
+fn run_dim<const D: usize>(case: &Case, out: &Path, progress: &mut dyn FnMut(&Progress)) -> Result<RunSummary, RunError> {
+    let mut sim = case.build::<D>()?;
+    let diag_path = out.join("diagnostics.csv");
+    let mut diag = DiagnosticsWriter::create(&diag_path).map_err(|e| io_err(&diag_path, e))?;
+    let mut snaps = Snapshots { dir: out.to_path_buf(), formats: case.output.formats.clone(), written: vec![], files: vec![] };
+    let initial = sim.diagnostics();
+    diag.record(&initial).map_err(|e| io_err(&diag_path, e))?;
+    snaps.write(&sim)?;
+    let t_end = case.time.t_end;
+    let every = case.output.snapshot_every;
+    let start = Instant::now();
+    let mut updates = 0.0;
+    let mut next_snap = if every > 0.0 { every } else { t_end };
+    let mut diag_err = None;
+    let result = (|| -> Result<(), RunError> {
+        while sim.time < t_end {
+            let target = next_snap.min(t_end);
+            sim.advance_to(target, |s| {
+                updates += s.sys.particles.len() as f64;
+                if s.steps % case.output.diagnostics_every == 0 {
+                    if let Err(e) = diag.record(&s.diagnostics()) {
+                        diag_err.get_or_insert(io_err(&diag_path, e));
+                    }
+                }
+                progress(&Progress {
+                    time: s.time,
+                    t_end,
+                    step: s.steps,
+                    dt: s.last_dt,
+                    particles: s.sys.particles.len(),
+                    rate: updates / start.elapsed().as_secs_f64().max(1e-9),
+                });
+            })?;
+            if sim.steps > case.time.max_steps {
+                return Err(RunError::Case(CaseError(format!(
+                    "time.max_steps: the run needed more than {} steps before t_end; raise the limit (≥ 1)",
+                    case.time.max_steps
+                ))));
+            }
+            if let Some(e) = diag_err.take() {
+                return Err(e);
+            }
+            snaps.write(&sim)?;
+            next_snap += every;
+        }
+        Ok(())
+    })();
+    let last = sim.diagnostics();
+    let _ = diag.record(&last);
+    result?;
+    let wall = start.elapsed().as_secs_f64();
+    let mut summary = RunSummary {
+        case: case.case.name.clone(),
+        dimension: D,
+        particles: sim.sys.particles.len(),
+        steps: sim.steps,
+        time: sim.time,
+        wall_seconds: wall,
+        particle_updates_per_second: updates / wall.max(1e-9),
+        snapshots: snaps.files.clone(),
+        initial,
+        last,
+        shock_tube: None,
+        plot: None,
+    };
+    if let Some(v) = &case.verify {
+        verify_riemann(case, v, &sim, out, &mut summary)?;
+    }
+    let path = out.join("summary.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&summary).unwrap_or_default()).map_err(|e| io_err(&path, e))?;
+    Ok(summary)
+}
+
+fn verify_riemann<const D: usize>(
+    case: &Case,
+    v: &crate::case::VerifyRiemann,
+    sim: &Simulation<D>,
+    out: &Path,
+    summary: &mut RunSummary,
+) -> Result<(), RunError> {
+    let gamma = crate::eos::Eos::gamma(&case.eos);
+    let rs = ExactRiemann::new(
+        Primitive { rho: v.left[0], u: v.left[1], p: v.left[2] },
+        Primitive { rho: v.right[0], u: v.right[1], p: v.right[2] },
+        gamma,
+    )
+    .map_err(|e| RunError::Case(CaseError(format!("verify: {e}"))))?;
+    let p = &sim.sys.particles;
+    let samples: Vec<(f64, f64, f64, f64)> =
+        (0..p.len()).map(|i| (p.pos[i][0], p.rho[i], p.vel[i][0], p.pressure[i])).collect();
+    let (lo, hi) = (v.x_min.unwrap_or(f64::NEG_INFINITY), v.x_max.unwrap_or(f64::INFINITY));
+    let errs = shock_tube_errors(&rs, v.x0, sim.time, &samples, lo, hi);
+    summary.shock_tube = Some(errs);
+    let (x0, x1) = (case.domain.min[0], case.domain.max[0]);
+    let exact = |f: fn(&Primitive) -> f64| -> Vec<(f64, f64)> {
+        (0..=2000).map(|i| {
+            let x = x0 + (x1 - x0) * i as f64 / 2000.0;
+            (x, f(&rs.at(x, v.x0, sim.time)))
+        }).collect()
+    };
+    let (er, eu, ep) = (exact(|s| s.rho), exact(|s| s.u), exact(|s| s.p));
+    let ee: Vec<(f64, f64)> = er.iter().zip(ep.iter()).map(|(&(x, r), &(_, pp))| (x, if r > 0.0 { pp / ((gamma - 1.0) * r) } else { 0.0 })).collect();
+    let col = |f: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> { (0..p.len()).map(|i| (p.pos[i][0], f(i))).collect() };
+    let (pr, pu, pp, pe) = (col(&|i| p.rho[i]), col(&|i| p.vel[i][0]), col(&|i| p.pressure[i]), col(&|i| p.u[i]));
+    let png = out.join("profile.png");
+    let caption = format!(
+        "{} at t = {:.3}: {} particles, L1(rho) = {:.3e}  [sphfmu run]",
+        case.case.name, sim.time, p.len(), errs.l1_density
+    );
+    crate::io::plot::profile_png(
+        &png,
+        &caption,
+        &[
+            crate::io::plot::Panel { title: "density", particles: &pr, exact: &er },
+            crate::io::plot::Panel { title: "velocity", particles: &pu, exact: &eu },
+            crate::io::plot::Panel { title: "pressure", particles: &pp, exact: &ep },
+            crate::io::plot::Panel { title: "specific internal energy", particles: &pe, exact: &ee },
+        ],
+    )
+    .map_err(|e| io_err(&png, e))?;
+    summary.plot = Some(png);
+    Ok(())
+}

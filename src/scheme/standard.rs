@@ -1,0 +1,229 @@
+//! "Traditional" SPH, the baseline every paper compares with (Rosswog spec §6.2 with X = m;
+//! Price 2012 review): grad-h momentum and energy equations, Monaghan–Gingold artificial
+//! viscosity with the Balsara (1995) switch, optional Price (2008) artificial conductivity.
+//!
+//!   dv_a/dt = −Σ_b m_b [ P_a/(Ω_a ρ_a²) ∇_a W_ab(h_a) + P_b/(Ω_b ρ_b²) ∇_a W_ab(h_b) ]
+//!             − Σ_b m_b Π_ab ∇̄_a W_ab + g
+//!   du_a/dt =  P_a/(Ω_a ρ_a²) Σ_b m_b v_ab·∇_a W_ab(h_a) + ½ Σ_b m_b Π_ab v_ab·∇̄_a W_ab
+//!             + Σ_b m_b α_u v_sig,u (u_a − u_b) F̄_ab / ρ̄_ab
+//!
+//! with ∇̄W = ½[∇W(h_a) + ∇W(h_b)], F̄_ab = r̂_ab·∇̄_a W_ab (≤ 0), and for approaching pairs
+//! (v_ab·r_ab < 0): μ_ab = h̄ v_ab·r_ab/(r_ab² + ε h̄²), Π_ab = (−α c̄ μ + β μ²)/ρ̄ · f̄_Balsara.
+//! Every pair term is evaluated from the same expression in a's and b's loops with dx
+//! negated, so Σ m_a dv_a/dt = 0 to round-off and the energy pair terms cancel likewise.
+
+use super::{smoothing, Scheme, SchemeError};
+use crate::particles::Vector;
+use crate::system::System;
+use serde::{Deserialize, Serialize};
+
+/// Parameters of `[scheme] name = "standard"`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StandardParams {
+    /// Linear viscosity coefficient α (Monaghan–Gingold), [0, 10].
+    pub alpha: f64,
+    /// Quadratic viscosity coefficient β, [0, 20].
+    pub beta: f64,
+    /// Balsara shear switch on the viscosity.
+    pub balsara: bool,
+    /// Artificial-conductivity coefficient α_u (0 = off), [0, 5].
+    pub conductivity: f64,
+    /// ε in μ_ab's denominator, (0, 1].
+    pub epsilon: f64,
+}
+
+impl Default for StandardParams {
+    fn default() -> Self {
+        Self {
+            alpha: 1.0,
+            beta: 2.0,
+            balsara: true,
+            conductivity: 0.0,
+            epsilon: 0.01,
+        }
+    }
+}
+
+pub(crate) fn check_range(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), String> {
+    if v.is_finite() && v >= lo && v <= hi {
+        Ok(())
+    } else {
+        Err(format!("{key}: must be in [{lo}, {hi}], got {v}"))
+    }
+}
+
+impl StandardParams {
+    pub fn validate(&self) -> Result<(), String> {
+        check_range("scheme.alpha", self.alpha, 0.0, 10.0)?;
+        check_range("scheme.beta", self.beta, 0.0, 20.0)?;
+        check_range("scheme.conductivity", self.conductivity, 0.0, 5.0)?;
+        if !(self.epsilon > 0.0 && self.epsilon <= 1.0) {
+            return Err(format!("scheme.epsilon: must be in (0, 1], got {}", self.epsilon));
+        }
+        Ok(())
+    }
+}
+
+pub struct StandardSph {
+    params: StandardParams,
+    /// Slot of the Balsara factor in `extra_scalars`.
+    balsara_slot: usize,
+}
+
+impl StandardSph {
+    pub fn new(params: StandardParams) -> Self {
+        Self { params, balsara_slot: usize::MAX }
+    }
+}
+
+#[derive(Clone, Copy)]
+struct GradAcc<const D: usize> {
+    div: f64,
+    /// Σ m_b v_ab ⊗ ∇W, the velocity-gradient sum (curl from its antisymmetric part).
+    grad: nalgebra::SMatrix<f64, D, D>,
+}
+
+impl<const D: usize> Default for GradAcc<D> {
+    fn default() -> Self {
+        Self { div: 0.0, grad: nalgebra::SMatrix::zeros() }
+    }
+}
+
+#[derive(Clone, Copy)]
+struct ForceAcc<const D: usize> {
+    acc: Vector<D>,
+    dudt: f64,
+    vsig: f64,
+}
+
+impl<const D: usize> Default for ForceAcc<D> {
+    fn default() -> Self {
+        Self { acc: Vector::zeros(), dudt: 0.0, vsig: 0.0 }
+    }
+}
+
+/// |∇×v| from the velocity-gradient tensor (2D: |∂v_y/∂x − ∂v_x/∂y|; 1D: 0).
+fn curl_norm<const D: usize>(g: &nalgebra::SMatrix<f64, D, D>) -> f64 {
+    match D {
+        2 => (g[(1, 0)] - g[(0, 1)]).abs(),
+        3 => {
+            let cx = g[(2, 1)] - g[(1, 2)];
+            let cy = g[(0, 2)] - g[(2, 0)];
+            let cz = g[(1, 0)] - g[(0, 1)];
+            (cx * cx + cy * cy + cz * cz).sqrt()
+        }
+        _ => 0.0,
+    }
+}
+
+impl<const D: usize> Scheme<D> for StandardSph {
+    fn name(&self) -> &'static str {
+        "standard"
+    }
+
+    fn init(&mut self, sys: &mut System<D>) {
+        self.balsara_slot = sys.particles.add_scalar_field(1.0);
+        let alpha = self.params.alpha;
+        sys.particles.alpha.iter_mut().for_each(|a| *a = alpha);
+    }
+
+    fn evaluate(&mut self, sys: &mut System<D>) -> Result<(), SchemeError> {
+        smoothing::solve_density_and_h(sys);
+        sys.update_eos();
+        let n = sys.particles.len();
+
+        // Pass 1: velocity gradient (SPH estimate with grad-h): ∂v^i/∂x^j = −1/(Ω ρ) Σ m_b v_ab^i ∂_j W(h_a).
+        let mut grads = vec![GradAcc::<D>::default(); n];
+        if self.params.balsara && D > 1 {
+            let p = &sys.particles;
+            let k = &sys.kernel;
+            sys.gather(&mut grads, |a, g, pr| {
+                let ev = k.eval(pr.r, p.h[a]);
+                if pr.r > 0.0 && ev.dwdr != 0.0 {
+                    let gw = pr.dx * (ev.dwdr / pr.r);
+                    let vab = p.vel[a] - pr.vb;
+                    g.div += p.mass[pr.b] * vab.dot(&gw);
+                    g.grad += p.mass[pr.b] * vab * gw.transpose();
+                }
+            });
+            sys.stats.total_pairs += sys.neighbours.total_pairs() as u64;
+        }
+        {
+            let slot = self.balsara_slot;
+            let p = &mut sys.particles;
+            for a in 0..n {
+                let s = -1.0 / (p.omega[a] * p.rho[a]);
+                let div = s * grads[a].div;
+                let curl = s.abs() * curl_norm(&grads[a].grad);
+                p.div_v[a] = div;
+                p.curl_v[a] = curl;
+                p.extra_scalars[slot][a] = if self.params.balsara && D > 1 {
+                    div.abs() / (div.abs() + curl + 1e-4 * p.sound_speed[a] / p.h[a] + 1e-300)
+                } else {
+                    1.0
+                };
+            }
+        }
+
+        // Pass 2: forces and energy.
+        let prm = self.params;
+        let slot = self.balsara_slot;
+        let mut out = vec![ForceAcc::<D>::default(); n];
+        {
+            let p = &sys.particles;
+            let k = &sys.kernel;
+            let bal = &p.extra_scalars[slot];
+            sys.gather(&mut out, |a, o, pr| {
+                let b = pr.b;
+                if pr.r <= 0.0 {
+                    return;
+                }
+                let ea = k.eval(pr.r, p.h[a]);
+                let eb = k.eval(pr.r, p.h[b]);
+                let rhat = pr.dx / pr.r;
+                // ∇_a W_ab(h) = dW/dr · r̂_ab
+                let fa = ea.dwdr;
+                let fb = eb.dwdr;
+                let pa = p.pressure[a] / (p.omega[a] * p.rho[a] * p.rho[a]);
+                let pb = p.pressure[b] / (p.omega[b] * p.rho[b] * p.rho[b]);
+                let mb = p.mass[b];
+                let vab = p.vel[a] - pr.vb;
+                let w = vab.dot(&rhat);
+                let fbar = 0.5 * (fa + fb);
+                let mut force = pa * fa + pb * fb; // along r̂, times −m_b below
+                let mut dudt = pa * mb * w * fa;
+                let ca = p.sound_speed[a];
+                let cb = p.sound_speed[b];
+                let vsig = ca + cb - 3.0 * w.min(0.0);
+                o.vsig = o.vsig.max(vsig);
+                let rho_bar = 0.5 * (p.rho[a] + p.rho[b]);
+                if w < 0.0 {
+                    let hbar = 0.5 * (p.h[a] + p.h[b]);
+                    let mu = hbar * w * pr.r / (pr.r * pr.r + prm.epsilon * hbar * hbar);
+                    let alpha = 0.5 * (p.alpha[a] + p.alpha[b]);
+                    let fbal = 0.5 * (bal[a] + bal[b]);
+                    let pi = fbal * (-alpha * 0.5 * (ca + cb) * mu + prm.beta * mu * mu) / rho_bar;
+                    force += pi * fbar;
+                    dudt += 0.5 * mb * pi * w * fbar;
+                }
+                if prm.conductivity > 0.0 {
+                    let vsig_u = ((p.pressure[a] - p.pressure[b]).abs() / rho_bar).sqrt();
+                    dudt += mb * prm.conductivity * vsig_u * (p.u[a] - p.u[b]) * fbar / rho_bar;
+                }
+                o.acc -= (mb * force) * rhat;
+                o.dudt += dudt;
+            });
+        }
+        sys.stats.force_pairs = sys.neighbours.total_pairs() as u64;
+        sys.stats.total_pairs += sys.stats.force_pairs;
+        let g = sys.gravity;
+        let p = &mut sys.particles;
+        for (a, o) in out.into_iter().enumerate() {
+            p.acc[a] = o.acc + g;
+            p.dudt[a] = o.dudt;
+            p.v_sig[a] = o.vsig.max(p.sound_speed[a]);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,241 @@
+//! The driver: a system, a scheme and an integrator, advanced with a global time step.
+
+use crate::integrate::{Integrator, IntegratorKind};
+use crate::particles::Vector;
+use crate::scheme::Scheme;
+use crate::system::System;
+use serde::Serialize;
+use std::fmt;
+
+/// Time-step control (`[time]` in case files).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepControl {
+    /// Courant factor on h/v_sig, with v_sig = max_b(c_a + c_b − 3 min(0, v_ab·r̂_ab)).
+    pub cfl: f64,
+    /// Factor on sqrt(h/|a|).
+    pub cfl_accel: f64,
+    /// A step below this stops the run (instability).
+    pub dt_min: f64,
+    pub dt_max: f64,
+    /// Largest growth of dt from one step to the next.
+    pub max_growth: f64,
+}
+
+impl Default for StepControl {
+    fn default() -> Self {
+        Self { cfl: 0.3, cfl_accel: 0.25, dt_min: 1e-12, dt_max: f64::INFINITY, max_growth: 1.5 }
+    }
+}
+
+/// Why a run stopped early.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SolverError {
+    NonFinite { field: &'static str, particle: u32, time: f64, step: u64 },
+    DtCollapse { dt: f64, dt_min: f64, time: f64, step: u64 },
+    Scheme { message: String, time: f64, step: u64 },
+}
+
+impl fmt::Display for SolverError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SolverError::NonFinite { field, particle, time, step } => write!(
+                f,
+                "unstable: non-finite {field} on particle {particle} at t = {time:.6e} (step {step})"
+            ),
+            SolverError::DtCollapse { dt, dt_min, time, step } => write!(
+                f,
+                "unstable: time step {dt:.3e} fell below time.dt_min = {dt_min:.3e} at t = {time:.6e} (step {step})"
+            ),
+            SolverError::Scheme { message, time, step } => {
+                write!(f, "scheme failed at t = {time:.6e} (step {step}): {message}")
+            }
+        }
+    }
+}
+
+impl std::error::Error for SolverError {}
+
+/// Conserved totals and step facts at one instant.
+#[derive(Debug, Clone, Copy, Serialize, Default)]
+pub struct Diagnostics {
+    pub time: f64,
+    pub step: u64,
+    pub dt: f64,
+    pub particles: usize,
+    pub mass: f64,
+    pub momentum: [f64; 3],
+    pub angular_momentum: [f64; 3],
+    pub kinetic_energy: f64,
+    pub internal_energy: f64,
+    pub total_energy: f64,
+}
+
+pub struct Simulation<const D: usize> {
+    pub sys: System<D>,
+    pub scheme: Box<dyn Scheme<D>>,
+    pub integrator: Integrator<D>,
+    pub control: StepControl,
+    pub time: f64,
+    pub steps: u64,
+    pub last_dt: f64,
+    /// Reorder particles along the grid every this many steps (cache locality); 0 = never.
+    pub reorder_every: u64,
+}
+
+impl<const D: usize> Simulation<D> {
+    /// Initialise the scheme and evaluate the derivatives of the initial state.
+    pub fn new(
+        mut sys: System<D>,
+        mut scheme: Box<dyn Scheme<D>>,
+        kind: IntegratorKind,
+        control: StepControl,
+    ) -> Result<Self, SolverError> {
+        scheme.init(&mut sys);
+        scheme.evaluate(&mut sys).map_err(|e| SolverError::Scheme {
+            message: e.0,
+            time: 0.0,
+            step: 0,
+        })?;
+        let sim = Self {
+            sys,
+            scheme,
+            integrator: Integrator::new(kind),
+            control,
+            time: 0.0,
+            steps: 0,
+            last_dt: 0.0,
+            reorder_every: 25,
+        };
+        sim.check_finite()?;
+        Ok(sim)
+    }
+
+    /// The step the stability criteria allow now.
+    pub fn stable_dt(&self) -> f64 {
+        let p = &self.sys.particles;
+        let c = &self.control;
+        let mut dt = c.dt_max;
+        for a in 0..p.len() {
+            let h = p.h[a];
+            if p.v_sig[a] > 0.0 {
+                dt = dt.min(c.cfl * h / p.v_sig[a]);
+            }
+            let amag = p.acc[a].norm();
+            if amag > 0.0 {
+                dt = dt.min(c.cfl_accel * (h / amag).sqrt());
+            }
+        }
+        if self.last_dt > 0.0 {
+            dt = dt.min(c.max_growth * self.last_dt);
+        }
+        dt
+    }
+
+    fn check_finite(&self) -> Result<(), SolverError> {
+        if let Some((i, field)) = self.sys.first_non_finite() {
+            return Err(SolverError::NonFinite {
+                field,
+                particle: self.sys.particles.id[i],
+                time: self.time,
+                step: self.steps,
+            });
+        }
+        Ok(())
+    }
+
+    /// One step of at most `dt_cap`. Returns the step taken.
+    pub fn step(&mut self, dt_cap: f64) -> Result<f64, SolverError> {
+        let stable = self.stable_dt();
+        let mut dt = stable.min(dt_cap);
+        if !(dt.is_finite()) {
+            dt = dt_cap;
+        }
+        // A dt cap (output time, end time) may be tiny; only the stability limit can collapse.
+        if !(stable >= self.control.dt_min) {
+            return Err(SolverError::DtCollapse {
+                dt: stable,
+                dt_min: self.control.dt_min,
+                time: self.time,
+                step: self.steps,
+            });
+        }
+        if self.reorder_every > 0 && self.steps > 0 && self.steps % self.reorder_every == 0 {
+            self.reorder();
+        }
+        self.integrator
+            .step(&mut self.sys, self.scheme.as_mut(), dt)
+            .map_err(|e| SolverError::Scheme { message: e.0, time: self.time, step: self.steps })?;
+        self.scheme.end_step(&mut self.sys, dt);
+        self.time += dt;
+        self.steps += 1;
+        if dt < dt_cap || self.last_dt == 0.0 {
+            self.last_dt = dt;
+        }
+        self.check_finite()?;
+        Ok(dt)
+    }
+
+    /// Advance to time t exactly (the last step is shortened to land on t).
+    pub fn advance_to(&mut self, t: f64, mut on_step: impl FnMut(&Self)) -> Result<(), SolverError> {
+        while self.time < t {
+            let remaining = t - self.time;
+            // Avoid a sliver step: split the last two steps evenly.
+            let stable = self.stable_dt();
+            let cap = if remaining > stable && remaining < 2.0 * stable { 0.5 * remaining } else { remaining };
+            self.step(cap)?;
+            if (t - self.time).abs() <= 1e-12 * t.abs().max(1.0) {
+                self.time = t;
+            }
+            on_step(self);
+        }
+        Ok(())
+    }
+
+    /// Sort particles by grid cell for memory locality.
+    pub fn reorder(&mut self) {
+        let perm = self.sys.grid.sorted.clone();
+        if perm.len() == self.sys.particles.len() {
+            self.sys.particles.permute(&perm);
+            // Lists refer to old indices: rebuild at the next evaluation (always done there);
+            // mark them stale now.
+            self.sys.neighbours = Default::default();
+        }
+    }
+
+    pub fn diagnostics(&self) -> Diagnostics {
+        let p = &self.sys.particles;
+        let mut d = Diagnostics {
+            time: self.time,
+            step: self.steps,
+            dt: self.last_dt,
+            particles: p.len(),
+            ..Default::default()
+        };
+        for a in 0..p.len() {
+            let m = p.mass[a];
+            let v = p.vel[a];
+            let x = p.pos[a];
+            d.mass += m;
+            for k in 0..D {
+                d.momentum[k] += m * v[k];
+            }
+            let (x3, v3) = (to3(&x), to3(&v));
+            let l = x3.cross(&v3) * m;
+            for k in 0..3 {
+                d.angular_momentum[k] += l[k];
+            }
+            d.kinetic_energy += 0.5 * m * v.norm_squared();
+            d.internal_energy += m * p.u[a];
+        }
+        d.total_energy = d.kinetic_energy + d.internal_energy;
+        d
+    }
+}
+
+fn to3<const D: usize>(v: &Vector<D>) -> nalgebra::Vector3<f64> {
+    let mut o = nalgebra::Vector3::zeros();
+    for k in 0..D {
+        o[k] = v[k];
+    }
+    o
+}

@@ -1,0 +1,44 @@
+//! Verification against exact solutions, shared by tests, the CLI and tools.
+
+pub mod riemann;
+
+use riemann::{ExactRiemann, Primitive};
+
+/// L1 = mean |q_i − q_exact(x_i)| over the given samples (the peers' definition, peers.md §1.3).
+pub fn l1_error(samples: &[(f64, f64)], exact: impl Fn(f64) -> f64) -> f64 {
+    if samples.is_empty() {
+        return f64::NAN;
+    }
+    samples.iter().map(|&(x, q)| (q - exact(x)).abs()).sum::<f64>() / samples.len() as f64
+}
+
+/// Errors of a 1D shock-tube profile against the exact Riemann solution.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct ShockTubeErrors {
+    pub l1_density: f64,
+    pub l1_velocity: f64,
+    pub l1_pressure: f64,
+    pub particles: usize,
+}
+
+/// Compare particles (x, ρ, v, P) with the Riemann solution at time t, interface at x0,
+/// counting particles with x in [x_lo, x_hi].
+pub fn shock_tube_errors(
+    rs: &ExactRiemann,
+    x0: f64,
+    t: f64,
+    particles: &[(f64, f64, f64, f64)],
+    x_lo: f64,
+    x_hi: f64,
+) -> ShockTubeErrors {
+    let sel: Vec<_> = particles.iter().filter(|p| p.0 >= x_lo && p.0 <= x_hi).collect();
+    let n = sel.len().max(1) as f64;
+    let mut e = ShockTubeErrors { l1_density: 0.0, l1_velocity: 0.0, l1_pressure: 0.0, particles: sel.len() };
+    for &&(x, rho, v, p) in &sel {
+        let ex: Primitive = rs.at(x, x0, t);
+        e.l1_density += (rho - ex.rho).abs() / n;
+        e.l1_velocity += (v - ex.u).abs() / n;
+        e.l1_pressure += (p - ex.p).abs() / n;
+    }
+    e
+}
