@@ -1,0 +1,103 @@
+//! Bad input: every malformed or out-of-range case file gives one line naming the key (and the
+//! allowed range); the CLI exits 2 without a panic; an unstable run exits 3 keeping snapshots.
+
+use sphfmu::case::Case;
+use std::process::Command;
+
+const SOD: &str = include_str!("../models/sod.toml");
+
+fn err_of(text: &str) -> String {
+    Case::parse(text).expect_err("must be rejected").0
+}
+
+#[test]
+fn each_bad_value_names_its_key_and_range() {
+    let cases: &[(&str, &str, &[&str])] = &[
+        ("dimension = 1", "dimension = 4", &["case.dimension", "1, 2 or 3"]),
+        ("gamma = 1.4", "gamma = 0.9", &["eos.gamma", "(1, 10]"]),
+        ("eta = 1.2", "eta = 9.0", &["kernel.eta", "[0.5, 5]"]),
+        ("alpha = 1.0", "alpha = -1.0", &["scheme.alpha", "[0, 10]"]),
+        ("cfl = 0.3", "cfl = 2.0", &["time.cfl", "(0, 1]"]),
+        ("t_end = 0.15", "t_end = -1.0", &["time.t_end", "> 0"]),
+        ("density = 0.125", "density = 0.0", &["region[1].density", "> 0"]),
+        ("max = [0.5]\nboundary", "max = [-0.7]\nboundary", &["domain.max[0]", "greater than"]),
+        ("min = [0.0]\nmax = [0.5]", "min = [0.0, 1.0]\nmax = [0.5]", &["region[1].min", "1 entries"]),
+        ("snapshot_every = 0.05", "snapshot_every = -1", &["output.snapshot_every", "≥ 0"]),
+        ("conductivity = 1.0", "conductivity = 1.0\nviscosity = 3", &["unknown field", "viscosity"]),
+        ("name = \"cubic-spline\"", "name = \"gaussian\"", &["unknown variant", "gaussian"]),
+        ("boundary = [\"reflect\"]", "boundary = [\"sticky\"]", &["sticky"]),
+        ("t_end = 0.15", "t_end = \"soon\"", &["line", "invalid type"]),
+    ];
+    for (from, to, needles) in cases {
+        assert!(SOD.contains(from), "fixture lacks {from:?}");
+        let msg = err_of(&SOD.replacen(from, to, 1));
+        assert!(!msg.contains('\n'), "error must be one line: {msg:?}");
+        for n in *needles {
+            assert!(msg.contains(n), "error for {to:?} lacks {n:?}: {msg}");
+        }
+    }
+}
+
+#[test]
+fn malformed_toml_and_missing_tables() {
+    let m = err_of("[case\nname = 1");
+    assert!(m.starts_with("line 1"), "{m}");
+    let m = err_of(&SOD.replace("[verify]", "[verify_x]"));
+    assert!(m.contains("unknown field") && m.contains("verify_x"), "{m}");
+    let no_regions: String = SOD.split("[[region]]").next().unwrap().to_string();
+    assert!(err_of(&no_regions).contains("region"));
+}
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_sphfmu"))
+}
+
+#[test]
+fn cli_exit_code_2_with_one_line_for_bad_cases() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(&bad, SOD.replace("gamma = 1.4", "gamma = 0.5")).unwrap();
+    for sub in ["check", "run"] {
+        let mut cmd = bin();
+        cmd.arg(sub).arg(&bad);
+        if sub == "run" {
+            cmd.arg("--quiet").arg("--out").arg(dir.path().join("o"));
+        }
+        let out = cmd.output().unwrap();
+        assert_eq!(out.status.code(), Some(2), "{sub}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.trim().lines().count(), 1, "{sub}: {err}");
+        assert!(err.contains("eos.gamma") && !err.contains("panicked"), "{err}");
+    }
+    let out = bin().args(["check", "/nonexistent/case.toml"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read"));
+    let ok = bin().args(["check", concat!(env!("CARGO_MANIFEST_DIR"), "/models/sod.toml"), "--build"]).output().unwrap();
+    assert_eq!(ok.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&ok.stdout).contains("720 particles"));
+}
+
+#[test]
+fn unstable_run_exits_3_and_keeps_snapshots() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = dir.path().join("collapse.toml");
+    // A dt floor above the stable step: the first step reports the collapse.
+    std::fs::write(&case, SOD.replace("cfl = 0.3", "cfl = 0.3\ndt_min = 0.01")).unwrap();
+    let out_dir = dir.path().join("out");
+    let out = bin().arg("run").arg(&case).arg("--out").arg(&out_dir).arg("--quiet").output().unwrap();
+    assert_eq!(out.status.code(), Some(3));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains("time.dt_min") && err.contains("unstable"), "{err}");
+    assert!(out_dir.join("snapshot_00000.vtu").exists());
+    assert!(out_dir.join("diagnostics.csv").exists());
+}
+
+#[test]
+fn non_finite_state_is_reported_not_propagated() {
+    let case = Case::parse(SOD).unwrap();
+    let mut sim = case.build::<1>().unwrap();
+    sim.sys.particles.u[100] = f64::NAN;
+    let e = sim.step(f64::INFINITY).unwrap_err().to_string();
+    assert!(e.contains("non-finite") || e.contains("unstable"), "{e}");
+}

@@ -1,0 +1,90 @@
+//! The grid neighbour search equals the O(N²) reference on random, clustered and periodic sets.
+
+use sphfmu::domain::{BoundaryKind, Domain};
+use sphfmu::neighbours::{brute_force, CellGrid, NeighbourList};
+use sphfmu::particles::Vector;
+
+struct Rng(u64);
+impl Rng {
+    fn u(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+fn check<const D: usize>(pos: &[Vector<D>], reach: &[f64], dom: &Domain<D>) -> usize {
+    let rmax = reach.iter().cloned().fold(0.0, f64::max);
+    let grid = CellGrid::build(pos, dom, rmax);
+    let list = NeighbourList::build(pos, reach, dom, &grid);
+    let reference = brute_force(pos, reach, dom);
+    let mut total = 0;
+    for a in 0..pos.len() {
+        let mut got = list.of(a).to_vec();
+        got.sort_unstable();
+        assert_eq!(got, reference[a], "particle {a}");
+        total += got.len();
+    }
+    total
+}
+
+fn domain<const D: usize>(kind: BoundaryKind) -> Domain<D> {
+    Domain { lo: [0.0; D], hi: [1.0; D], kind: [kind; D] }
+}
+
+#[test]
+fn random_sets_with_variable_h_all_boundaries() {
+    let mut rng = Rng(0x1234_5678);
+    for kind in [BoundaryKind::Open, BoundaryKind::Periodic, BoundaryKind::Reflect] {
+        let pos: Vec<Vector<2>> = (0..1500).map(|_| Vector::<2>::new(rng.u(), rng.u())).collect();
+        let reach: Vec<f64> = (0..1500).map(|_| 0.02 + 0.06 * rng.u()).collect();
+        let n = check(&pos, &reach, &domain::<2>(kind));
+        assert!(n > 10_000, "{kind:?}: too few pairs ({n}) for a meaningful test");
+        let pos3: Vec<Vector<3>> = (0..1500).map(|_| Vector::<3>::new(rng.u(), rng.u(), rng.u())).collect();
+        let reach3: Vec<f64> = (0..1500).map(|_| 0.05 + 0.1 * rng.u()).collect();
+        check(&pos3, &reach3, &domain::<3>(kind));
+        let pos1: Vec<Vector<1>> = (0..500).map(|_| Vector::<1>::new(rng.u())).collect();
+        let reach1: Vec<f64> = (0..500).map(|_| 0.005 + 0.02 * rng.u()).collect();
+        check(&pos1, &reach1, &domain::<1>(kind));
+    }
+}
+
+#[test]
+fn clustered_sets_with_strongly_varying_h() {
+    let mut rng = Rng(99);
+    // A dense clump (small h) inside a sparse background (large h): scatter neighbours matter.
+    let mut pos = Vec::new();
+    let mut reach = Vec::new();
+    for _ in 0..1200 {
+        pos.push(Vector::<2>::new(0.5 + 0.03 * (rng.u() - 0.5), 0.5 + 0.03 * (rng.u() - 0.5)));
+        reach.push(0.004 + 0.004 * rng.u());
+    }
+    for _ in 0..400 {
+        pos.push(Vector::<2>::new(rng.u(), rng.u()));
+        reach.push(0.08 + 0.04 * rng.u());
+    }
+    for kind in [BoundaryKind::Open, BoundaryKind::Periodic, BoundaryKind::Reflect] {
+        check(&pos, &reach, &domain::<2>(kind));
+    }
+}
+
+#[test]
+fn periodic_and_mirror_images_reach_across_faces() {
+    // Two particles near opposite faces: periodic sees each other; reflect sees own mirrors.
+    let pos = vec![Vector::<2>::new(0.01, 0.5), Vector::<2>::new(0.99, 0.5)];
+    let reach = vec![0.05, 0.05];
+    let per = domain::<2>(BoundaryKind::Periodic);
+    let grid = CellGrid::build(&pos, &per, 0.05);
+    let l = NeighbourList::build(&pos, &reach, &per, &grid);
+    assert_eq!(l.of(0).len(), 1);
+    let refl = domain::<2>(BoundaryKind::Reflect);
+    let grid = CellGrid::build(&pos, &refl, 0.05);
+    let l = NeighbourList::build(&pos, &reach, &refl, &grid);
+    // each sees only its own mirror image across its nearest face
+    assert_eq!(l.of(0).len(), 1);
+    let (b, code) = sphfmu::neighbours::unpack(l.of(0)[0]);
+    assert_eq!((b, code), (0, 1));
+    let d = refl.separation(&pos[0], &pos[0], code);
+    assert!((d[0] - 0.02).abs() < 1e-15);
+}
