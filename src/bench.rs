@@ -63,6 +63,7 @@ pub fn run_one<const D: usize>(n: usize, steps: u64, kernel: &str) -> Result<Ben
     let mut sim = case.build::<D>().map_err(|e| e.0)?;
     // warm-up step (allocations, first list build)
     sim.step(f64::INFINITY).map_err(|e| e.to_string())?;
+    sim.sys.stats = Default::default();
     let mut force_pairs = 0u64;
     let mut all_pairs = 0u64;
     let t0 = Instant::now();
@@ -73,6 +74,11 @@ pub fn run_one<const D: usize>(n: usize, steps: u64, kernel: &str) -> Result<Ben
         all_pairs += sim.sys.stats.total_pairs;
     }
     let secs = t0.elapsed().as_secs_f64();
+    let st = &sim.sys.stats;
+    eprintln!(
+        "{D}D N={}: neighbours {:.2} s, density/h {:.2} s ({:.2} Newton iterations/particle), gradients {:.2} s, forces {:.2} s, total {:.2} s",
+        sim.sys.particles.len(), st.seconds_neighbours, st.seconds_density, st.h_iterations, st.seconds_gradients, st.seconds_forces, secs
+    );
     let np = sim.sys.particles.len();
     Ok(BenchRow {
         dimension: D,

@@ -83,6 +83,8 @@ pub struct RunSummary {
     pub last: crate::sim::Diagnostics,
     pub shock_tube: Option<ShockTubeErrors>,
     pub plot: Option<PathBuf>,
+    /// Wall-clock seconds per phase: neighbour lists, density/h, gradients, forces.
+    pub phase_seconds: [f64; 4],
 }
 
 /// Run `case` writing into `out`. `progress` is called after every step.
@@ -206,6 +208,10 @@ fn run_dim<const D: usize>(case: &Case, out: &Path, progress: &mut dyn FnMut(&Pr
         last,
         shock_tube: None,
         plot: None,
+        phase_seconds: {
+            let st = &sim.sys.stats;
+            [st.seconds_neighbours, st.seconds_density, st.seconds_gradients, st.seconds_forces]
+        },
     };
     if let Some(v) = &case.verify {
         verify_riemann(case, v, &sim, out, &mut summary)?;

@@ -4,6 +4,7 @@ use crate::integrate::{Integrator, IntegratorKind};
 use crate::particles::Vector;
 use crate::scheme::Scheme;
 use crate::system::System;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::fmt;
 
@@ -104,7 +105,7 @@ impl<const D: usize> Simulation<D> {
             time: 0.0,
             steps: 0,
             last_dt: 0.0,
-            reorder_every: 25,
+            reorder_every: 20,
         };
         sim.check_finite()?;
         Ok(sim)
@@ -114,17 +115,22 @@ impl<const D: usize> Simulation<D> {
     pub fn stable_dt(&self) -> f64 {
         let p = &self.sys.particles;
         let c = &self.control;
-        let mut dt = c.dt_max;
-        for a in 0..p.len() {
-            let h = p.h[a];
-            if p.v_sig[a] > 0.0 {
-                dt = dt.min(c.cfl * h / p.v_sig[a]);
-            }
-            let amag = p.acc[a].norm();
-            if amag > 0.0 {
-                dt = dt.min(c.cfl_accel * (h / amag).sqrt());
-            }
-        }
+        let mut dt = (0..p.len())
+            .into_par_iter()
+            .map(|a| {
+                let h = p.h[a];
+                let mut dt = f64::INFINITY;
+                if p.v_sig[a] > 0.0 {
+                    dt = dt.min(c.cfl * h / p.v_sig[a]);
+                }
+                let amag = p.acc[a].norm();
+                if amag > 0.0 {
+                    dt = dt.min(c.cfl_accel * (h / amag).sqrt());
+                }
+                dt
+            })
+            .reduce(|| f64::INFINITY, f64::min)
+            .min(c.dt_max);
         if self.last_dt > 0.0 {
             dt = dt.min(c.max_growth * self.last_dt);
         }
@@ -196,9 +202,8 @@ impl<const D: usize> Simulation<D> {
         let perm = self.sys.grid.sorted.clone();
         if perm.len() == self.sys.particles.len() {
             self.sys.particles.permute(&perm);
-            // Lists refer to old indices: rebuild at the next evaluation (always done there);
-            // mark them stale now.
-            self.sys.neighbours = Default::default();
+            // Lists refer to old indices.
+            self.sys.invalidate_neighbours();
         }
     }
 

@@ -21,6 +21,12 @@ pub struct EvalStats {
     pub h_iterations: f64,
     /// Particles whose h hit the cap `h_max`.
     pub h_capped: u64,
+    /// Wall-clock seconds spent per phase since the counters were last reset
+    /// (neighbour lists, h/density solve, gradients, forces).
+    pub seconds_neighbours: f64,
+    pub seconds_density: f64,
+    pub seconds_gradients: f64,
+    pub seconds_forces: f64,
 }
 
 /// One neighbour seen from particle a.
@@ -48,30 +54,96 @@ pub struct System<const D: usize> {
     /// Uniform body force per unit mass.
     pub gravity: Vector<D>,
     pub grid: CellGrid<D>,
+    /// Master list with a skin, reused over steps while it stays exact.
+    pub verlet: VerletList<D>,
+    /// Working list for the current positions and h (no skin).
     pub neighbours: NeighbourList,
     pub stats: EvalStats,
 }
 
+/// A neighbour list with a skin, the positions and radii it was built for.
+#[derive(Debug, Clone)]
+pub struct VerletList<const D: usize> {
+    pub list: NeighbourList,
+    pub pos: Vec<Vector<D>>,
+    pub reach: Vec<f64>,
+    /// How many times it was built.
+    pub builds: u64,
+}
+
+impl<const D: usize> Default for VerletList<D> {
+    fn default() -> Self {
+        Self { list: NeighbourList::default(), pos: vec![], reach: vec![], builds: 0 }
+    }
+}
+
 impl<const D: usize> System<D> {
-    /// Build the grid and lists for search radius `reach_a = scale · 2h_a`.
-    pub fn rebuild_neighbours(&mut self, scale: f64) -> Vec<f64> {
-        let p = &self.particles;
-        let reach: Vec<f64> = p.h.iter().map(|&h| self.kernel.radius(h) * scale).collect();
-        let rmax = reach.iter().cloned().fold(0.0, f64::max);
-        self.grid = CellGrid::build(&p.pos, &self.domain, rmax);
-        self.neighbours = NeighbourList::build(&p.pos, &reach, &self.domain, &self.grid);
-        reach
+    /// Make the master (Verlet) list valid for the current positions and return, per
+    /// particle, the largest h it can serve exactly. The list holds every pair closer than
+    /// `max(Rb_a, Rb_b)` at build time (Rb = build reach); since then each particle moved at
+    /// most δ, so any pair closer than `max(R_a, R_b)` now is listed if `R_a + 2δ ≤ Rb_a` for
+    /// all a. The list is rebuilt (reach 2h(1+skin)) when `rebuild` is set or no slack is left.
+    pub fn prepare_master_list(&mut self, skin: f64, mut rebuild: bool) -> Vec<f64> {
+        let t0 = std::time::Instant::now();
+        let n = self.particles.len();
+        let v = &mut self.verlet;
+        if v.pos.len() != n || v.list.offsets.len() != n + 1 {
+            rebuild = true;
+        }
+        let mut delta = 0.0;
+        if !rebuild {
+            let dom = &self.domain;
+            let pos = &self.particles.pos;
+            delta = (0..n)
+                .into_par_iter()
+                .map(|i| dom.separation(&pos[i], &v.pos[i], 0).norm())
+                .reduce(|| 0.0, f64::max);
+            let k = &self.kernel;
+            let h = &self.particles.h;
+            // Rebuild when some particle's current support already lacks slack.
+            rebuild = (0..n).into_par_iter().any(|i| k.radius(h[i]) + 2.0 * delta > v.reach[i]);
+        }
+        if rebuild {
+            let p = &self.particles;
+            v.reach = p.h.iter().map(|&h| self.kernel.radius(h) * (1.0 + skin)).collect();
+            self.grid = CellGrid::build(&p.pos, &self.domain, &v.reach);
+            v.list = NeighbourList::build(&p.pos, &v.reach, &self.domain, &self.grid);
+            v.pos.clone_from(&p.pos);
+            v.builds += 1;
+            delta = 0.0;
+        }
+        self.stats.seconds_neighbours += t0.elapsed().as_secs_f64();
+        v.reach.iter().map(|&r| (r - 2.0 * delta) / crate::kernel::SUPPORT).collect()
     }
 
-    /// Drop list entries beyond `max(2h_a, 2h_b)` (the skin) once h is final.
+    /// The working list: the master list cut to `max(2h_a, 2h_b)` once h is final.
     pub fn compact_neighbours(&mut self) {
+        let t0 = std::time::Instant::now();
         let p = &self.particles;
         let dom = &self.domain;
         let k = &self.kernel;
-        self.neighbours.retain(|a, e| {
+        self.neighbours = self.verlet.list.filtered(|a, e| {
             let (b, code) = unpack(e);
             let r = k.radius(p.h[a]).max(k.radius(p.h[b]));
             dom.separation(&p.pos[a], &p.pos[b], code).norm_squared() < r * r
+        });
+        self.stats.seconds_neighbours += t0.elapsed().as_secs_f64();
+    }
+
+    /// Forget the lists (after particles were reordered, added or removed).
+    pub fn invalidate_neighbours(&mut self) {
+        self.verlet = VerletList::default();
+        self.neighbours = NeighbourList::default();
+    }
+
+    /// Scale every h by the expected compression over `dt` (continuity equation,
+    /// dh/dt = (h/D) ∇·v) so the h iteration starts close to its answer.
+    pub fn predict_h(&mut self, dt: f64) {
+        let p = &mut self.particles;
+        let d = D as f64;
+        p.h.par_iter_mut().zip(p.div_v.par_iter()).for_each(|(h, &dv)| {
+            let f = (dt * dv / d).clamp(-0.2, 0.2);
+            *h *= 1.0 + f;
         });
     }
 

@@ -15,8 +15,7 @@ impl Rng {
 }
 
 fn check<const D: usize>(pos: &[Vector<D>], reach: &[f64], dom: &Domain<D>) -> usize {
-    let rmax = reach.iter().cloned().fold(0.0, f64::max);
-    let grid = CellGrid::build(pos, dom, rmax);
+    let grid = CellGrid::build(pos, dom, reach);
     let list = NeighbourList::build(pos, reach, dom, &grid);
     let reference = brute_force(pos, reach, dom);
     let mut total = 0;
@@ -75,11 +74,11 @@ fn periodic_and_mirror_images_reach_across_faces() {
     let pos = vec![Vector::<2>::new(0.01, 0.5), Vector::<2>::new(0.99, 0.5)];
     let reach = vec![0.05, 0.05];
     let per = domain::<2>(BoundaryKind::Periodic);
-    let grid = CellGrid::build(&pos, &per, 0.05);
+    let grid = CellGrid::build(&pos, &per, &reach);
     let l = NeighbourList::build(&pos, &reach, &per, &grid);
     assert_eq!(l.of(0).len(), 1);
     let refl = domain::<2>(BoundaryKind::Reflect);
-    let grid = CellGrid::build(&pos, &refl, 0.05);
+    let grid = CellGrid::build(&pos, &refl, &reach);
     let l = NeighbourList::build(&pos, &reach, &refl, &grid);
     // each sees only its own mirror image across its nearest face
     assert_eq!(l.of(0).len(), 1);

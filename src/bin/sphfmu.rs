@@ -146,6 +146,11 @@ fn main() -> ExitCode {
                         "{}: {} particles, {} steps to t = {:.6}, {:.2} s, {:.3e} particle-updates/s",
                         s.case, s.particles, s.steps, s.time, s.wall_seconds, s.particle_updates_per_second
                     );
+                    let ph = s.phase_seconds;
+                    println!(
+                        "time per phase: neighbours {:.2} s, density/h {:.2} s, gradients {:.2} s, forces {:.2} s",
+                        ph[0], ph[1], ph[2], ph[3]
+                    );
                     let (e0, e1) = (s.initial.total_energy, s.last.total_energy);
                     println!("total energy {:.12e} -> {:.12e} (relative change {:.3e})", e0, e1, (e1 - e0) / e0.abs().max(1e-300));
                     if let Some(e) = s.shock_tube {

@@ -557,6 +557,7 @@ impl Case {
             h_max,
             gravity,
             grid: Default::default(),
+            verlet: Default::default(),
             neighbours: Default::default(),
             stats: Default::default(),
         };

@@ -142,6 +142,7 @@ impl<const D: usize> Integrator<D> {
                             }
                         });
                 }
+                sys.predict_h(dt);
                 scheme.evaluate(sys)?;
                 let p = &mut sys.particles;
                 let (sv, su) = (&self.saved.vel, &self.saved.u);
@@ -157,12 +158,16 @@ impl<const D: usize> Integrator<D> {
             IntegratorKind::SspRk3 => {
                 let mut s0 = std::mem::take(&mut self.saved);
                 s0.save(sys);
+                // predict_h: the stage times are t+dt, t+dt/2, t+dt.
                 combine(sys, &s0, 0.0, 1.0, dt);
+                sys.predict_h(dt);
                 scheme.evaluate(sys)?;
                 combine(sys, &s0, 0.75, 0.25, dt);
+                sys.predict_h(-0.5 * dt);
                 scheme.evaluate(sys)?;
                 combine(sys, &s0, 1.0 / 3.0, 2.0 / 3.0, dt);
                 enforce_boundaries(sys);
+                sys.predict_h(0.5 * dt);
                 scheme.evaluate(sys)?;
                 self.saved = s0;
             }
@@ -171,6 +176,7 @@ impl<const D: usize> Integrator<D> {
                 s0.save(sys);
                 // predictor to the midpoint with the previous (midpoint) derivatives
                 combine(sys, &s0, 0.0, 1.0, 0.5 * dt);
+                sys.predict_h(dt);
                 scheme.evaluate(sys)?;
                 // full step from the start state with the midpoint derivatives
                 {
@@ -188,6 +194,7 @@ impl<const D: usize> Integrator<D> {
                         });
                 }
                 enforce_boundaries(sys);
+                sys.predict_h(0.5 * dt);
                 scheme.refresh(sys);
                 self.saved = s0;
             }

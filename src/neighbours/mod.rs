@@ -10,6 +10,8 @@ use rayon::prelude::*;
 
 const INDEX_BITS: u32 = 27;
 const INDEX_MASK: u32 = (1 << INDEX_BITS) - 1;
+/// Largest stencil half-width in cells (the grid's cells are at least rmax/MAX_SPAN wide).
+const MAX_SPAN: usize = 16;
 /// Largest particle count a list can address.
 pub const MAX_PARTICLES: usize = INDEX_MASK as usize;
 
@@ -43,8 +45,19 @@ impl<const D: usize> Default for CellGrid<D> {
 }
 
 impl<const D: usize> CellGrid<D> {
-    /// Build a grid whose cells are at least `cell_size` wide.
-    pub fn build(pos: &[Vector<D>], domain: &Domain<D>, cell_size: f64) -> Self {
+    /// Build a grid for the search radii `reach`: cells half the median radius wide (so
+    /// dense regions with small h are not scanned with the largest radius), but never less
+    /// than 1/MAX_SPAN of the largest radius.
+    pub fn build(pos: &[Vector<D>], domain: &Domain<D>, reach: &[f64]) -> Self {
+        let rmax = reach.iter().cloned().fold(0.0, f64::max);
+        let median = if reach.is_empty() {
+            1.0
+        } else {
+            let mut r = reach.to_vec();
+            let mid = r.len() / 2;
+            *r.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1
+        };
+        let cell_size = (0.5 * median).max(rmax / MAX_SPAN as f64);
         let n = pos.len();
         let mut lo = [f64::INFINITY; D];
         let mut hi = [f64::NEG_INFINITY; D];
@@ -131,17 +144,33 @@ impl<const D: usize> CellGrid<D> {
         c
     }
 
-    /// Visit every particle in cells that can hold points within `reach` of `x`
-    /// (reach ≤ cell size; each candidate visited once).
+    /// Visit every particle in cells that can hold points within `reach` of `x`. The stencil
+    /// spans ⌈reach/cell⌉ cells each way, pruned to cells the search sphere touches; each
+    /// candidate is visited once (small periodic grids wrap onto a cell only once).
     #[inline]
-    pub fn for_candidates(&self, x: &Vector<D>, mut f: impl FnMut(usize)) {
-        let mut ranges: [[isize; 3]; D] = [[0; 3]; D];
+    pub fn for_candidates(&self, x: &Vector<D>, reach: f64, mut f: impl FnMut(usize)) {
+        const MAXS: usize = 2 * MAX_SPAN + 1;
+        let mut ranges: [[u32; MAXS]; D] = [[0; MAXS]; D];
+        // squared distance from x to the slab of each candidate cell along each axis
+        let mut gaps: [[f64; MAXS]; D] = [[0.0; MAXS]; D];
         let mut counts = [0usize; D];
+        let r2 = reach * reach;
+        let span = ((reach / self.cell).ceil() as isize).min(MAX_SPAN as isize);
         for k in 0..D {
-            let c = ((x[k] - self.origin[k]) / self.cell).floor() as isize;
+            let fc = (x[k] - self.origin[k]) / self.cell;
+            let c = fc.floor() as isize;
+            let within = (fc - c as f64) * self.cell; // offset of x inside its cell
             let dk = self.dims[k] as isize;
             let mut m = 0;
-            for off in -1..=1 {
+            for off in -span..=span {
+                let gap = match off {
+                    0 => 0.0,
+                    o if o < 0 => within + (-o - 1) as f64 * self.cell,
+                    o => o as f64 * self.cell - within,
+                };
+                if gap * gap >= r2 {
+                    continue;
+                }
                 let mut ci = c + off;
                 if self.periodic[k] {
                     ci = ci.rem_euclid(dk);
@@ -149,8 +178,12 @@ impl<const D: usize> CellGrid<D> {
                     // Outside the grid: holds no particle (the grid spans them all).
                     continue;
                 }
-                if !ranges[k][..m].contains(&ci) {
+                let ci = ci as u32;
+                if let Some(j) = ranges[k][..m].iter().position(|&r| r == ci) {
+                    gaps[k][j] = gaps[k][j].min(gap * gap);
+                } else {
                     ranges[k][m] = ci;
+                    gaps[k][m] = gap * gap;
                     m += 1;
                 }
             }
@@ -162,12 +195,16 @@ impl<const D: usize> CellGrid<D> {
         let mut idx = [0usize; D];
         loop {
             let mut c = 0usize;
+            let mut g2 = 0.0;
             for k in (0..D).rev() {
                 c = c * self.dims[k] + ranges[k][idx[k]] as usize;
+                g2 += gaps[k][idx[k]];
             }
-            let (s, e) = (self.cell_start[c] as usize, self.cell_start[c + 1] as usize);
-            for &j in &self.sorted[s..e] {
-                f(j as usize);
+            if g2 < r2 {
+                let (s, e) = (self.cell_start[c] as usize, self.cell_start[c + 1] as usize);
+                for &j in &self.sorted[s..e] {
+                    f(j as usize);
+                }
             }
             let mut k = 0;
             loop {
@@ -203,7 +240,9 @@ impl NeighbourList {
 
     /// Build lists for all particles: b is a neighbour of a (through image `code`) when
     /// `|x_a − image(x_b)| < max(reach_a, reach_b)`. Self (a, code 0) is excluded; a particle's
-    /// own mirror image is included. `reach` must not exceed the grid's cell size.
+    /// own mirror image is included. Each particle searches only its own radius (gather);
+    /// pairs found by one side only (the scatter neighbours of the other) are then added to
+    /// the other side's list, so the search cost follows the local h.
     pub fn build<const D: usize>(
         pos: &[Vector<D>],
         reach: &[f64],
@@ -212,37 +251,101 @@ impl NeighbourList {
     ) -> Self {
         let n = pos.len();
         const CHUNK: usize = 512;
-        let parts: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(CHUNK))
+        // (counts, entries, reverse entries (target, packed source))
+        type Part = (Vec<u32>, Vec<u32>, Vec<(u32, u32)>);
+        let parts: Vec<Part> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
             .map(|chunk| {
                 let start = chunk * CHUNK;
                 let end = (start + CHUNK).min(n);
                 let mut counts = Vec::with_capacity(end - start);
                 let mut out = Vec::with_capacity((end - start) * 32);
+                let mut rev = Vec::new();
                 let mut codes = Vec::with_capacity(8);
                 for a in start..end {
                     let before = out.len();
                     let xa = pos[a];
                     let ra = reach[a];
-                    domain.image_codes(&xa, grid.cell, &mut codes);
+                    let ra2 = ra * ra;
+                    domain.image_codes(&xa, ra, &mut codes);
                     for &code in &codes {
                         let q = domain.image_position(&xa, code);
-                        grid.for_candidates(&q, |b| {
+                        grid.for_candidates(&q, ra, |b| {
                             if b == a && code == 0 {
                                 return;
                             }
-                            let d = domain.separation(&xa, &pos[b], code);
-                            let r = ra.max(reach[b]);
-                            if d.norm_squared() < r * r {
+                            let d2 = domain.separation(&xa, &pos[b], code).norm_squared();
+                            if d2 < ra2 {
                                 out.push(pack(b, code));
+                                // b's own search (radius r_b) will not find a: hand it over.
+                                if d2 >= reach[b] * reach[b] {
+                                    rev.push((b as u32, pack(a, code)));
+                                }
                             }
                         });
+                    }
+                    counts.push((out.len() - before) as u32);
+                }
+                (counts, out, rev)
+            })
+            .collect();
+        let mut rev: Vec<(u32, u32)> = Vec::new();
+        let mut gathered = Vec::with_capacity(parts.len());
+        for (c, o, r) in parts {
+            rev.extend_from_slice(&r);
+            gathered.push((c, o));
+        }
+        let list = Self::concat(n, gathered);
+        if rev.is_empty() {
+            return list;
+        }
+        rev.par_sort_unstable();
+        // Merge: each particle's gather entries followed by its handed-over entries.
+        let parts: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|chunk| {
+                let (start, end) = (chunk * CHUNK, ((chunk + 1) * CHUNK).min(n));
+                let mut j = rev.partition_point(|&(t, _)| (t as usize) < start);
+                let mut counts = Vec::with_capacity(end - start);
+                let mut out = Vec::new();
+                for a in start..end {
+                    let before = out.len();
+                    out.extend_from_slice(list.of(a));
+                    while j < rev.len() && rev[j].0 as usize == a {
+                        out.push(rev[j].1);
+                        j += 1;
                     }
                     counts.push((out.len() - before) as u32);
                 }
                 (counts, out)
             })
             .collect();
+        Self::concat(n, parts)
+    }
+
+    /// A copy holding only the entries for which `keep(a, entry)` holds (used to drop the
+    /// skin once smoothing lengths have converged). Chunked in parallel.
+    pub fn filtered(&self, keep: impl Fn(usize, u32) -> bool + Sync) -> Self {
+        let n = self.offsets.len() - 1;
+        const CHUNK: usize = 1024;
+        let parts: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|chunk| {
+                let (start, end) = (chunk * CHUNK, ((chunk + 1) * CHUNK).min(n));
+                let mut counts = Vec::with_capacity(end - start);
+                let mut out = Vec::with_capacity(self.offsets[end] - self.offsets[start]);
+                for a in start..end {
+                    let before = out.len();
+                    out.extend(self.of(a).iter().copied().filter(|&e| keep(a, e)));
+                    counts.push((out.len() - before) as u32);
+                }
+                (counts, out)
+            })
+            .collect();
+        Self::concat(n, parts)
+    }
+
+    fn concat(n: usize, parts: Vec<(Vec<u32>, Vec<u32>)>) -> Self {
         let mut offsets = Vec::with_capacity(n + 1);
         offsets.push(0usize);
         let total: usize = parts.iter().map(|p| p.1.len()).sum();
@@ -254,25 +357,6 @@ impl NeighbourList {
             entries.extend_from_slice(&out);
         }
         Self { offsets, entries }
-    }
-
-    /// Keep only the entries for which `keep(a, entry)` holds (used to drop the skin once
-    /// smoothing lengths have converged).
-    pub fn retain(&mut self, keep: impl Fn(usize, u32) -> bool + Sync) {
-        let n = self.offsets.len() - 1;
-        let lists: Vec<Vec<u32>> = (0..n)
-            .into_par_iter()
-            .map(|a| self.of(a).iter().copied().filter(|&e| keep(a, e)).collect())
-            .collect();
-        let mut offsets = Vec::with_capacity(n + 1);
-        offsets.push(0);
-        let mut entries = Vec::with_capacity(self.entries.len());
-        for l in lists {
-            entries.extend_from_slice(&l);
-            offsets.push(entries.len());
-        }
-        self.offsets = offsets;
-        self.entries = entries;
     }
 }
 

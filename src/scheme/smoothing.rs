@@ -24,43 +24,49 @@ struct HSolve {
     capped: bool,
 }
 
-/// Build neighbour lists, solve h and ρ for every particle, compute Ω, then compact the
-/// lists to the final supports.
+/// Make the neighbour lists valid, solve h and ρ for every particle, compute Ω, then cut
+/// the working list to the final supports.
 pub fn solve_density_and_h<const D: usize>(sys: &mut System<D>) {
     let mut rounds = 0;
     let mut iters = 0u64;
     let mut rebuilds = 0;
+    let mut force = false;
     loop {
-        let reach = sys.rebuild_neighbours(1.0 + SKIN);
+        let h_allowed = sys.prepare_master_list(SKIN, force);
+        let t0 = std::time::Instant::now();
         let results: Vec<HSolve> = {
             let s = &*sys;
             (0..s.particles.len())
                 .into_par_iter()
                 .with_min_len(64)
-                .map(|a| solve_one(s, a, reach[a] / crate::kernel::SUPPORT))
+                .map(|a| solve_one(s, a, h_allowed[a]))
                 .collect()
         };
-        let mut again = false;
+        sys.stats.seconds_density += t0.elapsed().as_secs_f64();
         let p = &mut sys.particles;
-        let mut capped = 0;
-        for (a, r) in results.into_iter().enumerate() {
-            p.h[a] = r.h;
-            p.rho[a] = r.rho;
-            p.omega[a] = r.omega;
-            iters += r.iterations as u64;
-            again |= r.needs_rebuild;
-            capped += r.capped as u64;
-        }
+        p.h.par_iter_mut()
+            .zip(p.rho.par_iter_mut())
+            .zip(p.omega.par_iter_mut())
+            .zip(results.par_iter())
+            .for_each(|(((h, rho), om), r)| {
+                *h = r.h;
+                *rho = r.rho;
+                *om = r.omega;
+            });
+        iters += results.iter().map(|r| r.iterations as u64).sum::<u64>();
+        let again = results.iter().any(|r| r.needs_rebuild);
+        let capped = results.iter().filter(|r| r.capped).count() as u64;
         sys.stats.h_capped = capped;
         rounds += 1;
         if !again || rounds >= MAX_ROUNDS {
             break;
         }
+        force = true;
         rebuilds += 1;
     }
     sys.stats.list_rebuilds += rebuilds;
     sys.stats.h_iterations = iters as f64 / sys.particles.len().max(1) as f64;
-    sys.stats.total_pairs += sys.neighbours.total_pairs() as u64 * 2;
+    sys.stats.total_pairs += (sys.verlet.list.total_pairs() as f64 * sys.stats.h_iterations) as u64;
     sys.compact_neighbours();
 }
 
@@ -72,7 +78,7 @@ fn density_at<const D: usize>(sys: &System<D>, a: usize, h: f64) -> (f64, f64) {
     let mut rho = p.mass[a] * k.w0(h);
     let mut drho_dh = p.mass[a] * k.dwdh0(h);
     let xa = p.pos[a];
-    for &e in sys.neighbours.of(a) {
+    for &e in sys.verlet.list.of(a) {
         let (b, code) = unpack(e);
         let r = sys.domain.separation(&xa, &p.pos[b], code).norm();
         let ev = k.eval(r, h);
@@ -82,6 +88,7 @@ fn density_at<const D: usize>(sys: &System<D>, a: usize, h: f64) -> (f64, f64) {
     (rho, drho_dh)
 }
 
+/// Solve particle a's h; `h_reach` is the largest h its listed neighbours serve exactly.
 fn solve_one<const D: usize>(sys: &System<D>, a: usize, h_reach: f64) -> HSolve {
     let m = sys.particles.mass[a];
     let eta_d = sys.eta.powi(D as i32);

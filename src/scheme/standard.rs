@@ -15,6 +15,7 @@
 use super::{smoothing, Scheme, SchemeError};
 use crate::particles::Vector;
 use crate::system::System;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Parameters of `[scheme] name = "standard"`.
@@ -134,6 +135,7 @@ impl<const D: usize> Scheme<D> for StandardSph {
         let n = sys.particles.len();
 
         // Pass 1: velocity gradient (SPH estimate with grad-h): ∂v^i/∂x^j = −1/(Ω ρ) Σ m_b v_ab^i ∂_j W(h_a).
+        let t0 = std::time::Instant::now();
         let mut grads = vec![GradAcc::<D>::default(); n];
         if self.params.balsara && D > 1 {
             let p = &sys.particles;
@@ -150,22 +152,30 @@ impl<const D: usize> Scheme<D> for StandardSph {
             sys.stats.total_pairs += sys.neighbours.total_pairs() as u64;
         }
         {
-            let slot = self.balsara_slot;
+            let use_balsara = self.params.balsara && D > 1;
             let p = &mut sys.particles;
-            for a in 0..n {
-                let s = -1.0 / (p.omega[a] * p.rho[a]);
-                let div = s * grads[a].div;
-                let curl = s.abs() * curl_norm(&grads[a].grad);
-                p.div_v[a] = div;
-                p.curl_v[a] = curl;
-                p.extra_scalars[slot][a] = if self.params.balsara && D > 1 {
-                    div.abs() / (div.abs() + curl + 1e-4 * p.sound_speed[a] / p.h[a] + 1e-300)
-                } else {
-                    1.0
-                };
-            }
+            let (omega, rho, cs, h) = (&p.omega, &p.rho, &p.sound_speed, &p.h);
+            p.div_v
+                .par_iter_mut()
+                .zip(p.curl_v.par_iter_mut())
+                .zip(p.extra_scalars[self.balsara_slot].par_iter_mut())
+                .enumerate()
+                .for_each(|(a, ((dv, cv), bal))| {
+                    let s = -1.0 / (omega[a] * rho[a]);
+                    let div = s * grads[a].div;
+                    let curl = s.abs() * curl_norm(&grads[a].grad);
+                    *dv = div;
+                    *cv = curl;
+                    *bal = if use_balsara {
+                        div.abs() / (div.abs() + curl + 1e-4 * cs[a] / h[a] + 1e-300)
+                    } else {
+                        1.0
+                    };
+                });
         }
 
+        sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
+        let t0 = std::time::Instant::now();
         // Pass 2: forces and energy.
         let prm = self.params;
         let slot = self.balsara_slot;
@@ -215,15 +225,23 @@ impl<const D: usize> Scheme<D> for StandardSph {
                 o.dudt += dudt;
             });
         }
+        sys.stats.seconds_forces += t0.elapsed().as_secs_f64();
         sys.stats.force_pairs = sys.neighbours.total_pairs() as u64;
         sys.stats.total_pairs += sys.stats.force_pairs;
         let g = sys.gravity;
         let p = &mut sys.particles;
-        for (a, o) in out.into_iter().enumerate() {
-            p.acc[a] = o.acc + g;
-            p.dudt[a] = o.dudt;
-            p.v_sig[a] = o.vsig.max(p.sound_speed[a]);
-        }
+        let cs = &p.sound_speed;
+        p.acc
+            .par_iter_mut()
+            .zip(p.dudt.par_iter_mut())
+            .zip(p.v_sig.par_iter_mut())
+            .zip(out.par_iter())
+            .enumerate()
+            .for_each(|(a, (((acc, du), vs), o))| {
+                *acc = o.acc + g;
+                *du = o.dudt;
+                *vs = o.vsig.max(cs[a]);
+            });
         Ok(())
     }
 }
