@@ -1,0 +1,96 @@
+"""Run the 2D Noh problem in PySPH (PSPH, the closest scheme with a cheap force loop, and
+its CRKSPH) and in sphfmu (standard SPH, models/noh2d.toml) in one run, and print
+particle-updates/s side by side with the ratio and L1(rho) for r < 0.5 (peers.md §1.3).
+Called by tools/bench_peer.sh inside the PySPH venv."""
+import argparse
+import csv
+import glob
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+T_END = 0.6
+
+
+def noh_l1(x, y, rho, t=T_END):
+    r = np.hypot(x, y)
+    sel = r < 0.5
+    exact = np.where(r < t / 3.0, 16.0, 1.0 + t / np.maximum(r, 1e-12))
+    return float(np.mean(np.abs(rho[sel] - exact[sel])))
+
+
+def run_pysph(scheme, threads, outdir):
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads))
+    base = [sys.executable, "-m", "pysph.examples.gas_dynamics.noh", "--scheme", scheme]
+    if threads > 1:
+        base.append("--openmp")
+    # warm-up: compiles the generated Cython (not timed)
+    subprocess.run(base + ["-d", outdir + "_warm", "--max-steps", "3"], env=env, check=True,
+                   capture_output=True, text=True)
+    r = subprocess.run(base + ["-d", outdir], env=env, check=True, capture_output=True, text=True)
+    text = r.stdout + r.stderr
+    for log in glob.glob(os.path.join(outdir, "*.log")):
+        text += open(log).read()
+    took = re.findall(r"Run took:\s*([0-9.eE+-]+)", text)
+    iters = re.findall(r"iteration\s*[:=]?\s*(\d+)", text)
+    if not took:
+        raise RuntimeError("PySPH: no 'Run took' line in its output")
+    secs = float(took[-1])
+    from pysph.solver.utils import load, get_files
+    files = get_files(outdir)
+    data = load(files[-1])
+    fluid = data["arrays"]["fluid"]
+    steps = int(iters[-1]) if iters else int(round(T_END / 1e-3))
+    n = len(fluid.x)
+    return {"code": "PySPH 1.0b2", "scheme": scheme, "threads": threads, "particles": n,
+            "steps": steps, "seconds": secs, "updates_per_s": n * steps / secs,
+            "l1_rho": noh_l1(fluid.x, fluid.y, fluid.rho)}
+
+
+def run_sphfmu(threads, outdir):
+    exe = os.path.join(ROOT, "target", "release", "sphfmu")
+    r = subprocess.run([exe, "run", os.path.join(ROOT, "models", "noh2d.toml"), "--out", outdir,
+                        "--quiet", "--threads", str(threads)], check=True, capture_output=True, text=True)
+    s = json.load(open(os.path.join(outdir, "summary.json")))
+    final = sorted(glob.glob(os.path.join(outdir, "snapshot_*.csv")))[-1]
+    with open(final) as f:
+        rows = list(csv.DictReader(f))
+    x = np.array([float(q["x"]) for q in rows])
+    y = np.array([float(q["y"]) for q in rows])
+    rho = np.array([float(q["rho"]) for q in rows])
+    return {"code": "sphfmu", "scheme": "standard", "threads": threads, "particles": s["particles"],
+            "steps": s["steps"], "seconds": s["wall_seconds"],
+            "updates_per_s": s["particle_updates_per_second"], "l1_rho": noh_l1(x, y, rho)}
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--threads", type=int, default=os.cpu_count())
+    ap.add_argument("--schemes", default="psph,crksph")
+    args = ap.parse_args()
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        ours = run_sphfmu(args.threads, os.path.join(tmp, "sphfmu"))
+        rows.append(ours)
+        for scheme in args.schemes.split(","):
+            rows.append(run_pysph(scheme, args.threads, os.path.join(tmp, scheme)))
+    print(f"Noh 2D, 100^2 particles, t = {T_END}, {args.threads} thread(s), one run (tools/bench_peer.sh)")
+    print("| code | scheme | particles | steps | seconds | particle-updates/s | sphfmu / this | L1(rho), r < 0.5 |")
+    print("|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        ratio = ours["updates_per_s"] / r["updates_per_s"]
+        print(f"| {r['code']} | {r['scheme']} | {r['particles']} | {r['steps']} | {r['seconds']:.2f} | "
+              f"{r['updates_per_s']:.3e} | {ratio:.1f}x | {r['l1_rho']:.3f} |")
+    out = os.path.join(ROOT, "target", "bench-peer.json")
+    json.dump(rows, open(out, "w"), indent=2)
+    print(f"(also written to {out})")
+
+
+if __name__ == "__main__":
+    main()
