@@ -94,7 +94,12 @@ pub fn run_one<const D: usize>(n: usize, steps: u64, kernel: &str) -> Result<Ben
     })
 }
 
-pub fn run_table(sizes: &[usize], dims: &[usize], steps: u64, kernel: &str) -> Result<Vec<BenchRow>, String> {
+pub fn run_table(
+    sizes: &[usize],
+    dims: &[usize],
+    steps: u64,
+    kernel: &str,
+) -> Result<Vec<BenchRow>, String> {
     let mut rows = Vec::new();
     for &d in dims {
         for &n in sizes {
@@ -104,7 +109,10 @@ pub fn run_table(sizes: &[usize], dims: &[usize], steps: u64, kernel: &str) -> R
                 3 => run_one::<3>(n, steps, kernel)?,
                 _ => return Err(format!("--dims: must be 1, 2 or 3, got {d}")),
             };
-            eprintln!("{}D N={} done in {:.2} s", row.dimension, row.particles, row.seconds);
+            eprintln!(
+                "{}D N={} done in {:.2} s",
+                row.dimension, row.particles, row.seconds
+            );
             rows.push(row);
         }
     }
@@ -118,8 +126,15 @@ pub fn format_table(rows: &[BenchRow]) -> String {
     for r in rows {
         s.push_str(&format!(
             "| {}D | {} | {} | {:.1} | {} | {} | {:.3e} | {:.3e} | {:.3e} |\n",
-            r.dimension, r.particles, r.kernel, r.neighbours, r.threads, r.steps,
-            r.particle_updates_per_second, r.force_pairs_per_second, r.all_pairs_per_second
+            r.dimension,
+            r.particles,
+            r.kernel,
+            r.neighbours,
+            r.threads,
+            r.steps,
+            r.particle_updates_per_second,
+            r.force_pairs_per_second,
+            r.all_pairs_per_second
         ));
     }
     s

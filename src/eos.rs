@@ -54,7 +54,9 @@ impl EosConfig {
                 }
                 if let EosConfig::StiffenedGas { p_inf, .. } = *self {
                     if !(p_inf.is_finite() && p_inf >= 0.0) {
-                        return Err(format!("eos.p_inf: must be a finite number ≥ 0, got {p_inf}"));
+                        return Err(format!(
+                            "eos.p_inf: must be a finite number ≥ 0, got {p_inf}"
+                        ));
                     }
                 }
                 Ok(())

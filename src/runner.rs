@@ -88,7 +88,11 @@ pub struct RunSummary {
 }
 
 /// Run `case` writing into `out`. `progress` is called after every step.
-pub fn run_case(case: &Case, out: &Path, progress: &mut dyn FnMut(&Progress)) -> Result<RunSummary, RunError> {
+pub fn run_case(
+    case: &Case,
+    out: &Path,
+    progress: &mut dyn FnMut(&Progress),
+) -> Result<RunSummary, RunError> {
     std::fs::create_dir_all(out).map_err(|e| io_err(out, e))?;
     match case.dimension() {
         1 => run_dim::<1>(case, out, progress),
@@ -135,8 +139,13 @@ impl Snapshots {
         }
         let mut s = String::from("<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n");
         for (t, p) in &self.written {
-            let name = p.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
-            s.push_str(&format!("<DataSet timestep=\"{t:e}\" part=\"0\" file=\"{name}\"/>\n"));
+            let name = p
+                .file_name()
+                .map(|n| n.to_string_lossy().to_string())
+                .unwrap_or_default();
+            s.push_str(&format!(
+                "<DataSet timestep=\"{t:e}\" part=\"0\" file=\"{name}\"/>\n"
+            ));
         }
         s.push_str("</Collection>\n</VTKFile>\n");
         let path = self.dir.join("snapshots.pvd");
@@ -144,11 +153,20 @@ impl Snapshots {
     }
 }
 
-fn run_dim<const D: usize>(case: &Case, out: &Path, progress: &mut dyn FnMut(&Progress)) -> Result<RunSummary, RunError> {
+fn run_dim<const D: usize>(
+    case: &Case,
+    out: &Path,
+    progress: &mut dyn FnMut(&Progress),
+) -> Result<RunSummary, RunError> {
     let mut sim = case.build::<D>()?;
     let diag_path = out.join("diagnostics.csv");
     let mut diag = DiagnosticsWriter::create(&diag_path).map_err(|e| io_err(&diag_path, e))?;
-    let mut snaps = Snapshots { dir: out.to_path_buf(), formats: case.output.formats.clone(), written: vec![], files: vec![] };
+    let mut snaps = Snapshots {
+        dir: out.to_path_buf(),
+        formats: case.output.formats.clone(),
+        written: vec![],
+        files: vec![],
+    };
     let initial = sim.diagnostics();
     diag.record(&initial).map_err(|e| io_err(&diag_path, e))?;
     snaps.write(&sim)?;
@@ -210,14 +228,23 @@ fn run_dim<const D: usize>(case: &Case, out: &Path, progress: &mut dyn FnMut(&Pr
         plot: None,
         phase_seconds: {
             let st = &sim.sys.stats;
-            [st.seconds_neighbours, st.seconds_density, st.seconds_gradients, st.seconds_forces]
+            [
+                st.seconds_neighbours,
+                st.seconds_density,
+                st.seconds_gradients,
+                st.seconds_forces,
+            ]
         },
     };
     if let Some(v) = &case.verify {
         verify_riemann(case, v, &sim, out, &mut summary)?;
     }
     let path = out.join("summary.json");
-    std::fs::write(&path, serde_json::to_string_pretty(&summary).unwrap_or_default()).map_err(|e| io_err(&path, e))?;
+    std::fs::write(
+        &path,
+        serde_json::to_string_pretty(&summary).unwrap_or_default(),
+    )
+    .map_err(|e| io_err(&path, e))?;
     Ok(summary)
 }
 
@@ -230,41 +257,94 @@ fn verify_riemann<const D: usize>(
 ) -> Result<(), RunError> {
     let gamma = crate::eos::Eos::gamma(&case.eos);
     let rs = ExactRiemann::new(
-        Primitive { rho: v.left[0], u: v.left[1], p: v.left[2] },
-        Primitive { rho: v.right[0], u: v.right[1], p: v.right[2] },
+        Primitive {
+            rho: v.left[0],
+            u: v.left[1],
+            p: v.left[2],
+        },
+        Primitive {
+            rho: v.right[0],
+            u: v.right[1],
+            p: v.right[2],
+        },
         gamma,
     )
     .map_err(|e| RunError::Case(CaseError(format!("verify: {e}"))))?;
     let p = &sim.sys.particles;
-    let samples: Vec<(f64, f64, f64, f64)> =
-        (0..p.len()).map(|i| (p.pos[i][0], p.rho[i], p.vel[i][0], p.pressure[i])).collect();
-    let (lo, hi) = (v.x_min.unwrap_or(f64::NEG_INFINITY), v.x_max.unwrap_or(f64::INFINITY));
+    let samples: Vec<(f64, f64, f64, f64)> = (0..p.len())
+        .map(|i| (p.pos[i][0], p.rho[i], p.vel[i][0], p.pressure[i]))
+        .collect();
+    let (lo, hi) = (
+        v.x_min.unwrap_or(f64::NEG_INFINITY),
+        v.x_max.unwrap_or(f64::INFINITY),
+    );
     let errs = shock_tube_errors(&rs, v.x0, sim.time, &samples, lo, hi);
     summary.shock_tube = Some(errs);
     let (x0, x1) = (case.domain.min[0], case.domain.max[0]);
     let exact = |f: fn(&Primitive) -> f64| -> Vec<(f64, f64)> {
-        (0..=2000).map(|i| {
-            let x = x0 + (x1 - x0) * i as f64 / 2000.0;
-            (x, f(&rs.at(x, v.x0, sim.time)))
-        }).collect()
+        (0..=2000)
+            .map(|i| {
+                let x = x0 + (x1 - x0) * i as f64 / 2000.0;
+                (x, f(&rs.at(x, v.x0, sim.time)))
+            })
+            .collect()
     };
     let (er, eu, ep) = (exact(|s| s.rho), exact(|s| s.u), exact(|s| s.p));
-    let ee: Vec<(f64, f64)> = er.iter().zip(ep.iter()).map(|(&(x, r), &(_, pp))| (x, if r > 0.0 { pp / ((gamma - 1.0) * r) } else { 0.0 })).collect();
-    let col = |f: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> { (0..p.len()).map(|i| (p.pos[i][0], f(i))).collect() };
-    let (pr, pu, pp, pe) = (col(&|i| p.rho[i]), col(&|i| p.vel[i][0]), col(&|i| p.pressure[i]), col(&|i| p.u[i]));
+    let ee: Vec<(f64, f64)> = er
+        .iter()
+        .zip(ep.iter())
+        .map(|(&(x, r), &(_, pp))| {
+            (
+                x,
+                if r > 0.0 {
+                    pp / ((gamma - 1.0) * r)
+                } else {
+                    0.0
+                },
+            )
+        })
+        .collect();
+    let col = |f: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> {
+        (0..p.len()).map(|i| (p.pos[i][0], f(i))).collect()
+    };
+    let (pr, pu, pp, pe) = (
+        col(&|i| p.rho[i]),
+        col(&|i| p.vel[i][0]),
+        col(&|i| p.pressure[i]),
+        col(&|i| p.u[i]),
+    );
     let png = out.join("profile.png");
     let caption = format!(
         "{} at t = {:.3}: {} particles, L1(rho) = {:.3e}  [sphfmu run]",
-        case.case.name, sim.time, p.len(), errs.l1_density
+        case.case.name,
+        sim.time,
+        p.len(),
+        errs.l1_density
     );
     crate::io::plot::profile_png(
         &png,
         &caption,
         &[
-            crate::io::plot::Panel { title: "density", particles: &pr, exact: &er },
-            crate::io::plot::Panel { title: "velocity", particles: &pu, exact: &eu },
-            crate::io::plot::Panel { title: "pressure", particles: &pp, exact: &ep },
-            crate::io::plot::Panel { title: "specific internal energy", particles: &pe, exact: &ee },
+            crate::io::plot::Panel {
+                title: "density",
+                particles: &pr,
+                exact: &er,
+            },
+            crate::io::plot::Panel {
+                title: "velocity",
+                particles: &pu,
+                exact: &eu,
+            },
+            crate::io::plot::Panel {
+                title: "pressure",
+                particles: &pp,
+                exact: &ep,
+            },
+            crate::io::plot::Panel {
+                title: "specific internal energy",
+                particles: &pe,
+                exact: &ee,
+            },
         ],
     )
     .map_err(|e| io_err(&png, e))?;

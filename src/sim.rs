@@ -24,16 +24,36 @@ pub struct StepControl {
 
 impl Default for StepControl {
     fn default() -> Self {
-        Self { cfl: 0.3, cfl_accel: 0.25, dt_min: 1e-12, dt_max: f64::INFINITY, max_growth: 1.5 }
+        Self {
+            cfl: 0.3,
+            cfl_accel: 0.25,
+            dt_min: 1e-12,
+            dt_max: f64::INFINITY,
+            max_growth: 1.5,
+        }
     }
 }
 
 /// Why a run stopped early.
 #[derive(Debug, Clone, PartialEq)]
 pub enum SolverError {
-    NonFinite { field: &'static str, particle: u32, time: f64, step: u64 },
-    DtCollapse { dt: f64, dt_min: f64, time: f64, step: u64 },
-    Scheme { message: String, time: f64, step: u64 },
+    NonFinite {
+        field: &'static str,
+        particle: u32,
+        time: f64,
+        step: u64,
+    },
+    DtCollapse {
+        dt: f64,
+        dt_min: f64,
+        time: f64,
+        step: u64,
+    },
+    Scheme {
+        message: String,
+        time: f64,
+        step: u64,
+    },
 }
 
 impl fmt::Display for SolverError {
@@ -157,7 +177,7 @@ impl<const D: usize> Simulation<D> {
             dt = dt_cap;
         }
         // A dt cap (output time, end time) may be tiny; only the stability limit can collapse.
-        if !(stable >= self.control.dt_min) {
+        if stable.is_nan() || stable < self.control.dt_min {
             return Err(SolverError::DtCollapse {
                 dt: stable,
                 dt_min: self.control.dt_min,
@@ -170,7 +190,11 @@ impl<const D: usize> Simulation<D> {
         }
         self.integrator
             .step(&mut self.sys, self.scheme.as_mut(), dt)
-            .map_err(|e| SolverError::Scheme { message: e.0, time: self.time, step: self.steps })?;
+            .map_err(|e| SolverError::Scheme {
+                message: e.0,
+                time: self.time,
+                step: self.steps,
+            })?;
         self.scheme.end_step(&mut self.sys, dt);
         self.time += dt;
         self.steps += 1;
@@ -182,12 +206,20 @@ impl<const D: usize> Simulation<D> {
     }
 
     /// Advance to time t exactly (the last step is shortened to land on t).
-    pub fn advance_to(&mut self, t: f64, mut on_step: impl FnMut(&Self)) -> Result<(), SolverError> {
+    pub fn advance_to(
+        &mut self,
+        t: f64,
+        mut on_step: impl FnMut(&Self),
+    ) -> Result<(), SolverError> {
         while self.time < t {
             let remaining = t - self.time;
             // Avoid a sliver step: split the last two steps evenly.
             let stable = self.stable_dt();
-            let cap = if remaining > stable && remaining < 2.0 * stable { 0.5 * remaining } else { remaining };
+            let cap = if remaining > stable && remaining < 2.0 * stable {
+                0.5 * remaining
+            } else {
+                remaining
+            };
             self.step(cap)?;
             if (t - self.time).abs() <= 1e-12 * t.abs().max(1.0) {
                 self.time = t;

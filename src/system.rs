@@ -73,7 +73,12 @@ pub struct VerletList<const D: usize> {
 
 impl<const D: usize> Default for VerletList<D> {
     fn default() -> Self {
-        Self { list: NeighbourList::default(), pos: vec![], reach: vec![], builds: 0 }
+        Self {
+            list: NeighbourList::default(),
+            pos: vec![],
+            reach: vec![],
+            builds: 0,
+        }
     }
 }
 
@@ -101,11 +106,16 @@ impl<const D: usize> System<D> {
             let k = &self.kernel;
             let h = &self.particles.h;
             // Rebuild when some particle's current support already lacks slack.
-            rebuild = (0..n).into_par_iter().any(|i| k.radius(h[i]) + 2.0 * delta > v.reach[i]);
+            rebuild = (0..n)
+                .into_par_iter()
+                .any(|i| k.radius(h[i]) + 2.0 * delta > v.reach[i]);
         }
         if rebuild {
             let p = &self.particles;
-            v.reach = p.h.iter().map(|&h| self.kernel.radius(h) * (1.0 + skin)).collect();
+            v.reach =
+                p.h.iter()
+                    .map(|&h| self.kernel.radius(h) * (1.0 + skin))
+                    .collect();
             self.grid = CellGrid::build(&p.pos, &self.domain, &v.reach);
             v.list = NeighbourList::build(&p.pos, &v.reach, &self.domain, &self.grid);
             v.pos.clone_from(&p.pos);
@@ -113,7 +123,10 @@ impl<const D: usize> System<D> {
             delta = 0.0;
         }
         self.stats.seconds_neighbours += t0.elapsed().as_secs_f64();
-        v.reach.iter().map(|&r| (r - 2.0 * delta) / crate::kernel::SUPPORT).collect()
+        v.reach
+            .iter()
+            .map(|&r| (r - 2.0 * delta) / crate::kernel::SUPPORT)
+            .collect()
     }
 
     /// The working list: the master list cut to `max(2h_a, 2h_b)` once h is final.
@@ -141,10 +154,12 @@ impl<const D: usize> System<D> {
     pub fn predict_h(&mut self, dt: f64) {
         let p = &mut self.particles;
         let d = D as f64;
-        p.h.par_iter_mut().zip(p.div_v.par_iter()).for_each(|(h, &dv)| {
-            let f = (dt * dv / d).clamp(-0.2, 0.2);
-            *h *= 1.0 + f;
-        });
+        p.h.par_iter_mut()
+            .zip(p.div_v.par_iter())
+            .for_each(|(h, &dv)| {
+                let f = (dt * dv / d).clamp(-0.2, 0.2);
+                *h *= 1.0 + f;
+            });
     }
 
     /// The neighbour loop, written once: for every particle a (in parallel), call
@@ -156,21 +171,24 @@ impl<const D: usize> System<D> {
         let p = &self.particles;
         let dom = &self.domain;
         let nb = &self.neighbours;
-        out.par_iter_mut().enumerate().with_min_len(64).for_each(|(a, acc)| {
-            let xa = p.pos[a];
-            for &e in nb.of(a) {
-                let (b, code) = unpack(e);
-                let dx = dom.separation(&xa, &p.pos[b], code);
-                let pair = Pair {
-                    b,
-                    code,
-                    dx,
-                    r: dx.norm(),
-                    vb: dom.image_velocity(&p.vel[b], code),
-                };
-                f(a, acc, &pair);
-            }
-        });
+        out.par_iter_mut()
+            .enumerate()
+            .with_min_len(64)
+            .for_each(|(a, acc)| {
+                let xa = p.pos[a];
+                for &e in nb.of(a) {
+                    let (b, code) = unpack(e);
+                    let dx = dom.separation(&xa, &p.pos[b], code);
+                    let pair = Pair {
+                        b,
+                        code,
+                        dx,
+                        r: dx.norm(),
+                        vb: dom.image_velocity(&p.vel[b], code),
+                    };
+                    f(a, acc, &pair);
+                }
+            });
     }
 
     /// P and c_s from the EOS for every particle.

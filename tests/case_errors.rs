@@ -13,20 +13,56 @@ fn err_of(text: &str) -> String {
 #[test]
 fn each_bad_value_names_its_key_and_range() {
     let cases: &[(&str, &str, &[&str])] = &[
-        ("dimension = 1", "dimension = 4", &["case.dimension", "1, 2 or 3"]),
+        (
+            "dimension = 1",
+            "dimension = 4",
+            &["case.dimension", "1, 2 or 3"],
+        ),
         ("gamma = 1.4", "gamma = 0.9", &["eos.gamma", "(1, 10]"]),
         ("eta = 1.2", "eta = 9.0", &["kernel.eta", "[0.5, 5]"]),
         ("alpha = 1.0", "alpha = -1.0", &["scheme.alpha", "[0, 10]"]),
         ("cfl = 0.3", "cfl = 2.0", &["time.cfl", "(0, 1]"]),
         ("t_end = 0.15", "t_end = -1.0", &["time.t_end", "> 0"]),
-        ("density = 0.125", "density = 0.0", &["region[1].density", "> 0"]),
-        ("max = [0.5]\nboundary", "max = [-0.7]\nboundary", &["domain.max[0]", "greater than"]),
-        ("min = [0.0]\nmax = [0.5]", "min = [0.0, 1.0]\nmax = [0.5]", &["region[1].min", "1 entries"]),
-        ("snapshot_every = 0.05", "snapshot_every = -1", &["output.snapshot_every", "≥ 0"]),
-        ("conductivity = 1.0", "conductivity = 1.0\nviscosity = 3", &["unknown field", "viscosity"]),
-        ("name = \"cubic-spline\"", "name = \"gaussian\"", &["unknown variant", "gaussian"]),
-        ("boundary = [\"reflect\"]", "boundary = [\"sticky\"]", &["sticky"]),
-        ("t_end = 0.15", "t_end = \"soon\"", &["line", "invalid type"]),
+        (
+            "density = 0.125",
+            "density = 0.0",
+            &["region[1].density", "> 0"],
+        ),
+        (
+            "max = [0.5]\nboundary",
+            "max = [-0.7]\nboundary",
+            &["domain.max[0]", "greater than"],
+        ),
+        (
+            "min = [0.0]\nmax = [0.5]",
+            "min = [0.0, 1.0]\nmax = [0.5]",
+            &["region[1].min", "1 entries"],
+        ),
+        (
+            "snapshot_every = 0.05",
+            "snapshot_every = -1",
+            &["output.snapshot_every", "≥ 0"],
+        ),
+        (
+            "conductivity = 1.0",
+            "conductivity = 1.0\nviscosity = 3",
+            &["unknown field", "viscosity"],
+        ),
+        (
+            "name = \"cubic-spline\"",
+            "name = \"gaussian\"",
+            &["unknown variant", "gaussian"],
+        ),
+        (
+            "boundary = [\"reflect\"]",
+            "boundary = [\"sticky\"]",
+            &["sticky"],
+        ),
+        (
+            "t_end = 0.15",
+            "t_end = \"soon\"",
+            &["line", "invalid type"],
+        ),
     ];
     for (from, to, needles) in cases {
         assert!(SOD.contains(from), "fixture lacks {from:?}");
@@ -67,12 +103,25 @@ fn cli_exit_code_2_with_one_line_for_bad_cases() {
         assert_eq!(out.status.code(), Some(2), "{sub}");
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(err.trim().lines().count(), 1, "{sub}: {err}");
-        assert!(err.contains("eos.gamma") && !err.contains("panicked"), "{err}");
+        assert!(
+            err.contains("eos.gamma") && !err.contains("panicked"),
+            "{err}"
+        );
     }
-    let out = bin().args(["check", "/nonexistent/case.toml"]).output().unwrap();
+    let out = bin()
+        .args(["check", "/nonexistent/case.toml"])
+        .output()
+        .unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read"));
-    let ok = bin().args(["check", concat!(env!("CARGO_MANIFEST_DIR"), "/models/sod.toml"), "--build"]).output().unwrap();
+    let ok = bin()
+        .args([
+            "check",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/models/sod.toml"),
+            "--build",
+        ])
+        .output()
+        .unwrap();
     assert_eq!(ok.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&ok.stdout).contains("720 particles"));
 }
@@ -84,11 +133,21 @@ fn unstable_run_exits_3_and_keeps_snapshots() {
     // A dt floor above the stable step: the first step reports the collapse.
     std::fs::write(&case, SOD.replace("cfl = 0.3", "cfl = 0.3\ndt_min = 0.01")).unwrap();
     let out_dir = dir.path().join("out");
-    let out = bin().arg("run").arg(&case).arg("--out").arg(&out_dir).arg("--quiet").output().unwrap();
+    let out = bin()
+        .arg("run")
+        .arg(&case)
+        .arg("--out")
+        .arg(&out_dir)
+        .arg("--quiet")
+        .output()
+        .unwrap();
     assert_eq!(out.status.code(), Some(3));
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(err.trim().lines().count(), 1, "{err}");
-    assert!(err.contains("time.dt_min") && err.contains("unstable"), "{err}");
+    assert!(
+        err.contains("time.dt_min") && err.contains("unstable"),
+        "{err}"
+    );
     assert!(out_dir.join("snapshot_00000.vtu").exists());
     assert!(out_dir.join("diagnostics.csv").exists());
 }

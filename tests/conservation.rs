@@ -58,13 +58,19 @@ fn momentum_round_off_and_energy_to_integrator_accuracy() {
             for k in 0..2 {
                 let rel = (d.momentum[k] - prev.momentum[k]).abs() / p_scale;
                 // Measured ~1e-16 per step; the issue allows 1e-12.
-                assert!(rel < 1e-12, "{integrator}: momentum[{k}] changed by {rel:e} (relative) in one step");
+                assert!(
+                    rel < 1e-12,
+                    "{integrator}: momentum[{k}] changed by {rel:e} (relative) in one step"
+                );
             }
             prev = d;
         }
         let d = sim.diagnostics();
         let de = (d.total_energy - d0.total_energy).abs() / d0.total_energy;
-        println!("{integrator}: 40 steps to t = {:.4}, relative energy change {de:.3e}", d.time);
+        println!(
+            "{integrator}: 40 steps to t = {:.4}, relative energy change {de:.3e}",
+            d.time
+        );
         // Tolerances from measurement (see test output): RK3 3.0e-6, leapfrog 4.2e-5, RK2 1.1e-4
         // over these 40 steps of a strongly non-uniform flow; about 5x headroom.
         assert!(de < energy_tol, "{integrator}: energy drift {de:e}");

@@ -16,7 +16,13 @@ fn integral<const D: usize>(k: &DimKernel<D>, h: f64) -> f64 {
     let mut s = 0.0;
     for i in 0..=n {
         let r = i as f64 * dr;
-        let w = if i == 0 || i == n { 1.0 } else if i % 2 == 1 { 4.0 } else { 2.0 };
+        let w = if i == 0 || i == n {
+            1.0
+        } else if i % 2 == 1 {
+            4.0
+        } else {
+            2.0
+        };
         s += w * k.w(r, h) * measure(r);
     }
     s * dr / 3.0
@@ -49,8 +55,22 @@ fn gradient_and_h_derivative_match_finite_differences() {
             let fd_r = (dk.w(r + eps, h) - dk.w(r - eps, h)) / (2.0 * eps);
             let fd_h = (dk.w(r, h + eps) - dk.w(r, h - eps)) / (2.0 * eps);
             let scale = dk.w(0.0, h) / h;
-            assert!((e.dwdr - fd_r).abs() < 1e-7 * scale, "{} dW/dr at q={}: {} vs {}", k.name(), r / h, e.dwdr, fd_r);
-            assert!((e.dwdh - fd_h).abs() < 1e-7 * scale, "{} dW/dh at q={}: {} vs {}", k.name(), r / h, e.dwdh, fd_h);
+            assert!(
+                (e.dwdr - fd_r).abs() < 1e-7 * scale,
+                "{} dW/dr at q={}: {} vs {}",
+                k.name(),
+                r / h,
+                e.dwdr,
+                fd_r
+            );
+            assert!(
+                (e.dwdh - fd_h).abs() < 1e-7 * scale,
+                "{} dW/dh at q={}: {} vs {}",
+                k.name(),
+                r / h,
+                e.dwdh,
+                fd_h
+            );
         }
         assert_eq!(dk.w(SUPPORT * h, h), 0.0);
         assert_eq!(dk.w(SUPPORT * h * 1.01, h), 0.0);
@@ -62,7 +82,12 @@ fn septic_spline_matches_exact_values() {
     // CRKSPH spec §1.1: w7(0)=151/315, w7(1)=397/1680, w7(2)=1/42, w7(3)=1/5040 in native units
     // (native support 4 = our 2h, so native η = 2q).
     let k = sphfmu::kernel::SepticSplineW7;
-    for (eta, exact) in [(0.0, 151.0 / 315.0), (1.0, 397.0 / 1680.0), (2.0, 1.0 / 42.0), (3.0, 1.0 / 5040.0)] {
+    for (eta, exact) in [
+        (0.0, 151.0 / 315.0),
+        (1.0, 397.0 / 1680.0),
+        (2.0, 1.0 / 42.0),
+        (3.0, 1.0 / 5040.0),
+    ] {
         let (w, _) = k.shape(eta / 2.0);
         assert!((w - exact).abs() < 1e-15, "w7({eta}) = {w}, exact {exact}");
     }
@@ -125,9 +150,15 @@ fn lattice_quality_indicators_q1_to_q4() {
         }
         let n = 200.0;
         let (q1, q2, q3, q4) = (q1 / n, q2 / n, q3 / n, q4 / (4.0 * n));
-        println!("{} η={eta}: Q1 {q1:.3e}  Q2/r_s {q2:.3e}  Q3·r_s {q3:.3e}  Q4 {q4:.3e}", k.name());
+        println!(
+            "{} η={eta}: Q1 {q1:.3e}  Q2/r_s {q2:.3e}  Q3·r_s {q3:.3e}  Q4 {q4:.3e}",
+            k.name()
+        );
         // Same density error as the spec's independent computation, to 2 significant digits.
-        assert!((q1 - q1_ref).abs() < 0.06 * q1_ref, "Q1 {q1} vs reference {q1_ref}");
+        assert!(
+            (q1 - q1_ref).abs() < 0.06 * q1_ref,
+            "Q1 {q1} vs reference {q1_ref}"
+        );
         // Q2 and Q3 vanish by the lattice's symmetry.
         assert!(q2 < 1e-12 && q3 < 1e-10, "Q2 {q2}, Q3 {q3}");
     }

@@ -16,7 +16,11 @@ Integrators (time.integrator): leapfrog, ssp-rk3, crk-rk2.
 Exit codes: 0 done, 2 bad case file, 3 unstable run (snapshots so far kept), 4 I/O error.";
 
 #[derive(Parser)]
-#[command(name = "sphfmu", version, about = "Smoothed-particle hydrodynamics for co-simulation")]
+#[command(
+    name = "sphfmu",
+    version,
+    about = "Smoothed-particle hydrodynamics for co-simulation"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -79,7 +83,10 @@ fn set_threads(threads: Option<usize>) -> Result<(), String> {
         if n == 0 {
             return Err("--threads: must be ≥ 1".into());
         }
-        rayon::ThreadPoolBuilder::new().num_threads(n).build_global().map_err(|e| e.to_string())?;
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .map_err(|e| e.to_string())?;
     }
     Ok(())
 }
@@ -103,7 +110,9 @@ fn main() -> ExitCode {
                         _ => c.build::<3>().map(|s| s.sys.particles.len()),
                     };
                     match r {
-                        Ok(n) => println!("{}: ok ({}D, {n} particles)", case.display(), c.dimension()),
+                        Ok(n) => {
+                            println!("{}: ok ({}D, {n} particles)", case.display(), c.dimension())
+                        }
                         Err(e) => return fail(2, format!("{}: {e}", case.display())),
                     }
                 } else {
@@ -113,7 +122,12 @@ fn main() -> ExitCode {
             }
             Err(e) => fail(2, e),
         },
-        Command::Run { case, out, quiet, threads } => {
+        Command::Run {
+            case,
+            out,
+            quiet,
+            threads,
+        } => {
             if let Err(e) = set_threads(threads) {
                 return fail(2, e);
             }
@@ -121,10 +135,16 @@ fn main() -> ExitCode {
                 Ok(c) => c,
                 Err(e) => return fail(2, e),
             };
-            let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(1000) };
+            let bar = if quiet {
+                ProgressBar::hidden()
+            } else {
+                ProgressBar::new(1000)
+            };
             bar.set_style(
-                ProgressStyle::with_template("{bar:30} t={msg} [{elapsed_precise} < {eta_precise}]")
-                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+                ProgressStyle::with_template(
+                    "{bar:30} t={msg} [{elapsed_precise} < {eta_precise}]",
+                )
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
             );
             let mut last_draw = std::time::Instant::now();
             let mut on = |p: &Progress| {
@@ -152,7 +172,12 @@ fn main() -> ExitCode {
                         ph[0], ph[1], ph[2], ph[3]
                     );
                     let (e0, e1) = (s.initial.total_energy, s.last.total_energy);
-                    println!("total energy {:.12e} -> {:.12e} (relative change {:.3e})", e0, e1, (e1 - e0) / e0.abs().max(1e-300));
+                    println!(
+                        "total energy {:.12e} -> {:.12e} (relative change {:.3e})",
+                        e0,
+                        e1,
+                        (e1 - e0) / e0.abs().max(1e-300)
+                    );
                     if let Some(e) = s.shock_tube {
                         println!(
                             "L1 against the exact Riemann solution: rho {:.4e}, v {:.4e}, P {:.4e} ({} particles)",
@@ -168,14 +193,23 @@ fn main() -> ExitCode {
                 Err(e) => {
                     let code = e.exit_code() as u8;
                     let msg = match &e {
-                        RunError::Solver(_) => format!("{e} (snapshots so far kept in {})", out.display()),
+                        RunError::Solver(_) => {
+                            format!("{e} (snapshots so far kept in {})", out.display())
+                        }
                         _ => e.to_string(),
                     };
                     fail(code, msg)
                 }
             }
         }
-        Command::Bench { sizes, dims, steps, kernel, threads, json } => {
+        Command::Bench {
+            sizes,
+            dims,
+            steps,
+            kernel,
+            threads,
+            json,
+        } => {
             if let Err(e) = set_threads(threads) {
                 return fail(2, e);
             }
@@ -183,7 +217,10 @@ fn main() -> ExitCode {
                 Ok(rows) => {
                     println!("{}", sphfmu::bench::format_table(&rows));
                     if let Some(p) = json {
-                        if let Err(e) = std::fs::write(&p, serde_json::to_string_pretty(&rows).unwrap_or_default()) {
+                        if let Err(e) = std::fs::write(
+                            &p,
+                            serde_json::to_string_pretty(&rows).unwrap_or_default(),
+                        ) {
                             return fail(4, format!("{}: {e}", p.display()));
                         }
                     }

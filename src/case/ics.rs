@@ -37,7 +37,12 @@ fn volume_per_particle(lattice: Lattice, d: usize, a: f64) -> f64 {
 /// Points of a lattice filling the box [lo, hi], spacings adjusted so the box holds an
 /// integer number of cells in each direction (periodic tiling stays exact).
 /// Returns the points and the actual volume per particle.
-fn lattice_points<const D: usize>(lattice: Lattice, lo: &[f64], hi: &[f64], a: f64) -> (Vec<Vector<D>>, f64) {
+fn lattice_points<const D: usize>(
+    lattice: Lattice,
+    lo: &[f64],
+    hi: &[f64],
+    a: f64,
+) -> (Vec<Vector<D>>, f64) {
     let len = |k: usize| hi[k] - lo[k];
     let count = |l: f64, s: f64, even: bool| {
         let mut n = (l / s).round().max(1.0) as usize;
@@ -118,7 +123,9 @@ fn inside<const D: usize>(case: &Case, r: &Region, x: &Vector<D>) -> bool {
 
 /// Index of the last region containing x (later regions win).
 fn region_at<const D: usize>(case: &Case, x: &Vector<D>) -> Option<usize> {
-    (0..case.regions.len()).rev().find(|&i| inside(case, &case.regions[i], x))
+    (0..case.regions.len())
+        .rev()
+        .find(|&i| inside(case, &case.regions[i], x))
 }
 
 /// Primitive state (ρ, P or u, v) a region prescribes at x.
@@ -158,7 +165,11 @@ fn state_of<const D: usize>(case: &Case, r: &Region, x: &Vector<D>) -> State<D> 
 }
 
 /// Fill the regions with particles and set their state; see the case-file reference.
-pub fn generate_particles<const D: usize>(case: &Case, domain: &Domain<D>, eta: f64) -> Result<Particles<D>, CaseError> {
+pub fn generate_particles<const D: usize>(
+    case: &Case,
+    domain: &Domain<D>,
+    eta: f64,
+) -> Result<Particles<D>, CaseError> {
     let mut p = Particles::<D>::default();
     let mut spacing_of = Vec::new();
     for (ri, r) in case.regions.iter().enumerate() {
@@ -192,7 +203,9 @@ pub fn generate_particles<const D: usize>(case: &Case, domain: &Domain<D>, eta: 
         }
     }
     if p.is_empty() {
-        return Err(CaseError("region: the regions hold no particle inside the domain".into()));
+        return Err(CaseError(
+            "region: the regions hold no particle inside the domain".into(),
+        ));
     }
     if p.len() > crate::neighbours::MAX_PARTICLES {
         return Err(CaseError(format!(
@@ -209,11 +222,16 @@ pub fn generate_particles<const D: usize>(case: &Case, domain: &Domain<D>, eta: 
             let mut xr = x;
             xl[f.axis] = f.position - 1e-9 * (1.0 + f.position.abs());
             xr[f.axis] = f.position + 1e-9 * (1.0 + f.position.abs());
-            let (Some(il), Some(ir)) = (region_at(case, &xl), region_at(case, &xr)) else { continue };
+            let (Some(il), Some(ir)) = (region_at(case, &xl), region_at(case, &xr)) else {
+                continue;
+            };
             if il == ir {
                 continue;
             }
-            let (sl, sr) = (state_of(case, &case.regions[il], &x), state_of(case, &case.regions[ir], &x));
+            let (sl, sr) = (
+                state_of(case, &case.regions[il], &x),
+                state_of(case, &case.regions[ir], &x),
+            );
             let w = 1.0 / (1.0 + (-(x[f.axis] - f.position) / f.width).exp());
             let rho = sl.rho + (sr.rho - sl.rho) * w;
             let pl = case.eos.pressure(sl.rho, sl.u);
@@ -228,12 +246,12 @@ pub fn generate_particles<const D: usize>(case: &Case, domain: &Domain<D>, eta: 
     }
     if let Some(pert) = &case.perturbation {
         let mut rng = SplitMix64::new(pert.seed);
-        for i in 0..p.len() {
-            let mut v = p.vel[i];
+        for (x, &spacing) in p.pos.iter_mut().zip(&spacing_of) {
+            let mut v = Vector::<D>::zeros();
             for k in 0..D {
-                p.pos[i][k] += pert.amplitude * spacing_of[i] * (2.0 * rng.uniform() - 1.0);
+                x[k] += pert.amplitude * spacing * (2.0 * rng.uniform() - 1.0);
             }
-            domain.enforce(&mut p.pos[i], &mut v);
+            domain.enforce(x, &mut v);
         }
     }
     Ok(p)

@@ -113,7 +113,12 @@ pub struct KernelConfig {
 
 impl Default for KernelConfig {
     fn default() -> Self {
-        Self { name: KernelName::CubicSpline, eta: None, sinc_n: None, h_max: None }
+        Self {
+            name: KernelName::CubicSpline,
+            eta: None,
+            sinc_n: None,
+            h_max: None,
+        }
     }
 }
 
@@ -180,7 +185,11 @@ fn default_diag_every() -> u64 {
 
 impl Default for OutputConfig {
     fn default() -> Self {
-        Self { snapshot_every: 0.0, formats: default_formats(), diagnostics_every: 1 }
+        Self {
+            snapshot_every: 0.0,
+            formats: default_formats(),
+            diagnostics_every: 1,
+        }
     }
 }
 
@@ -276,7 +285,11 @@ impl Case {
                 let line = text[..s.start.min(text.len())].matches('\n').count() + 1;
                 format!("line {line}: ")
             });
-            CaseError(format!("{}{}", span.unwrap_or_default(), one_line(e.message())))
+            CaseError(format!(
+                "{}{}",
+                span.unwrap_or_default(),
+                one_line(e.message())
+            ))
         })?;
         case.validate()?;
         Ok(case)
@@ -303,7 +316,9 @@ impl Case {
     fn kernel(&self) -> Result<AnyKernel, CaseError> {
         let n = self.kernel.sinc_n.unwrap_or(5);
         if self.kernel.sinc_n.is_some() && self.kernel.name != KernelName::Sinc {
-            return Err(CaseError("kernel.sinc_n: only allowed with kernel.name = \"sinc\"".into()));
+            return Err(CaseError(
+                "kernel.sinc_n: only allowed with kernel.name = \"sinc\"".into(),
+            ));
         }
         Ok(AnyKernel::from_name(self.kernel.name, n)?)
     }
@@ -316,7 +331,9 @@ impl Case {
     pub fn validate(&self) -> Result<(), CaseError> {
         let d = self.case.dimension;
         if !(1..=3).contains(&d) {
-            return Err(CaseError(format!("case.dimension: must be 1, 2 or 3, got {d}")));
+            return Err(CaseError(format!(
+                "case.dimension: must be 1, 2 or 3, got {d}"
+            )));
         }
         self.vec_len("domain.min", &self.domain.min)?;
         self.vec_len("domain.max", &self.domain.max)?;
@@ -337,11 +354,15 @@ impl Case {
         self.eos.validate()?;
         let eta = self.eta()?;
         if !(eta.is_finite() && (0.5..=5.0).contains(&eta)) {
-            return Err(CaseError(format!("kernel.eta: must be in [0.5, 5], got {eta}")));
+            return Err(CaseError(format!(
+                "kernel.eta: must be in [0.5, 5], got {eta}"
+            )));
         }
         if let Some(h) = self.kernel.h_max {
             if !(h.is_finite() && h > 0.0) {
-                return Err(CaseError(format!("kernel.h_max: must be a finite number > 0, got {h}")));
+                return Err(CaseError(format!(
+                    "kernel.h_max: must be a finite number > 0, got {h}"
+                )));
             }
         }
         self.scheme.validate()?;
@@ -350,15 +371,23 @@ impl Case {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(CaseError(format!("{key}: must be a finite number > 0, got {v}")))
+                Err(CaseError(format!(
+                    "{key}: must be a finite number > 0, got {v}"
+                )))
             }
         };
         pos("time.t_end", t.t_end)?;
         if !(t.cfl > 0.0 && t.cfl <= 1.0) {
-            return Err(CaseError(format!("time.cfl: must be in (0, 1], got {}", t.cfl)));
+            return Err(CaseError(format!(
+                "time.cfl: must be in (0, 1], got {}",
+                t.cfl
+            )));
         }
         if !(t.cfl_accel > 0.0 && t.cfl_accel <= 1.0) {
-            return Err(CaseError(format!("time.cfl_accel: must be in (0, 1], got {}", t.cfl_accel)));
+            return Err(CaseError(format!(
+                "time.cfl_accel: must be in (0, 1], got {}",
+                t.cfl_accel
+            )));
         }
         pos("time.dt_min", t.dt_min)?;
         if let Some(m) = t.dt_max {
@@ -375,20 +404,30 @@ impl Case {
             )));
         }
         if o.diagnostics_every == 0 {
-            return Err(CaseError("output.diagnostics_every: must be ≥ 1, got 0".into()));
+            return Err(CaseError(
+                "output.diagnostics_every: must be ≥ 1, got 0".into(),
+            ));
         }
         if self.regions.is_empty() {
-            return Err(CaseError("region: at least one [[region]] is required".into()));
+            return Err(CaseError(
+                "region: at least one [[region]] is required".into(),
+            ));
         }
         for (i, r) in self.regions.iter().enumerate() {
             self.validate_region(i, r)?;
         }
         for (i, f) in self.interfaces.iter().enumerate() {
             if f.axis >= d {
-                return Err(CaseError(format!("interface[{i}].axis: must be in [0, {}], got {}", d - 1, f.axis)));
+                return Err(CaseError(format!(
+                    "interface[{i}].axis: must be in [0, {}], got {}",
+                    d - 1,
+                    f.axis
+                )));
             }
             if !f.position.is_finite() {
-                return Err(CaseError(format!("interface[{i}].position: must be finite")));
+                return Err(CaseError(format!(
+                    "interface[{i}].position: must be finite"
+                )));
             }
             pos(&format!("interface[{i}].width"), f.width)?;
         }
@@ -405,11 +444,15 @@ impl Case {
         }
         if let Some(v) = &self.verify {
             if !matches!(self.eos, EosConfig::IdealGas { .. }) {
-                return Err(CaseError("verify: the Riemann solution needs eos.type = \"ideal-gas\"".into()));
+                return Err(CaseError(
+                    "verify: the Riemann solution needs eos.type = \"ideal-gas\"".into(),
+                ));
             }
             for (k, s) in [("left", v.left), ("right", v.right)] {
                 if !(s.iter().all(|x| x.is_finite()) && s[0] >= 0.0 && s[2] >= 0.0) {
-                    return Err(CaseError(format!("verify.{k}: must be [ρ ≥ 0, v, P ≥ 0], finite, got {s:?}")));
+                    return Err(CaseError(format!(
+                        "verify.{k}: must be [ρ ≥ 0, v, P ≥ 0], finite, got {s:?}"
+                    )));
                 }
             }
         }
@@ -422,13 +465,19 @@ impl Case {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(CaseError(format!("{}: must be a finite number > 0, got {v}", key(k))))
+                Err(CaseError(format!(
+                    "{}: must be a finite number > 0, got {v}",
+                    key(k)
+                )))
             }
         };
         match r.shape {
             Shape::Box => {
                 if r.center.is_some() || r.radius.is_some() {
-                    return Err(CaseError(format!("{}: only for shape = \"sphere\"", key("center/radius"))));
+                    return Err(CaseError(format!(
+                        "{}: only for shape = \"sphere\"",
+                        key("center/radius")
+                    )));
                 }
                 if let Some(m) = &r.min {
                     self.vec_len(&key("min"), m)?;
@@ -439,41 +488,78 @@ impl Case {
                 let (lo, hi) = self.region_box(r);
                 for k in 0..self.case.dimension {
                     if hi[k] <= lo[k] {
-                        return Err(CaseError(format!("{}: must exceed min[{k}] = {}, got {}", key(&format!("max[{k}]")), lo[k], hi[k])));
+                        return Err(CaseError(format!(
+                            "{}: must exceed min[{k}] = {}, got {}",
+                            key(&format!("max[{k}]")),
+                            lo[k],
+                            hi[k]
+                        )));
                     }
                 }
             }
             Shape::Sphere => {
-                let c = r.center.as_ref().ok_or_else(|| CaseError(format!("{}: required for shape = \"sphere\"", key("center"))))?;
+                let c = r.center.as_ref().ok_or_else(|| {
+                    CaseError(format!(
+                        "{}: required for shape = \"sphere\"",
+                        key("center")
+                    ))
+                })?;
                 self.vec_len(&key("center"), c)?;
-                pos("radius", r.radius.ok_or_else(|| CaseError(format!("{}: required for shape = \"sphere\"", key("radius"))))?)?;
+                pos(
+                    "radius",
+                    r.radius.ok_or_else(|| {
+                        CaseError(format!(
+                            "{}: required for shape = \"sphere\"",
+                            key("radius")
+                        ))
+                    })?,
+                )?;
             }
         }
         match (r.spacing, r.particle_mass) {
             (Some(s), None) => pos("spacing", s)?,
             (None, Some(m)) => pos("particle_mass", m)?,
-            _ => return Err(CaseError(format!("{}: give exactly one of spacing and particle_mass", key("spacing")))),
+            _ => {
+                return Err(CaseError(format!(
+                    "{}: give exactly one of spacing and particle_mass",
+                    key("spacing")
+                )))
+            }
         }
         pos("density", r.density)?;
         match (r.pressure, r.internal_energy) {
             (Some(p), None) => {
                 if !(p.is_finite() && p >= 0.0) {
-                    return Err(CaseError(format!("{}: must be a finite number ≥ 0, got {p}", key("pressure"))));
+                    return Err(CaseError(format!(
+                        "{}: must be a finite number ≥ 0, got {p}",
+                        key("pressure")
+                    )));
                 }
             }
             (None, Some(u)) => {
                 if !(u.is_finite() && u >= 0.0) {
-                    return Err(CaseError(format!("{}: must be a finite number ≥ 0, got {u}", key("internal_energy"))));
+                    return Err(CaseError(format!(
+                        "{}: must be a finite number ≥ 0, got {u}",
+                        key("internal_energy")
+                    )));
                 }
             }
-            _ => return Err(CaseError(format!("{}: give exactly one of pressure and internal_energy", key("pressure")))),
+            _ => {
+                return Err(CaseError(format!(
+                    "{}: give exactly one of pressure and internal_energy",
+                    key("pressure")
+                )))
+            }
         }
         if let Some(v) = &r.velocity {
             self.vec_len(&key("velocity"), v)?;
         }
         if let Some(v) = r.radial_velocity {
             if !v.is_finite() {
-                return Err(CaseError(format!("{}: must be finite", key("radial_velocity"))));
+                return Err(CaseError(format!(
+                    "{}: must be finite",
+                    key("radial_velocity")
+                )));
             }
         }
         if let Some(c) = &r.radial_center {
@@ -492,7 +578,10 @@ impl Case {
             Shape::Sphere => {
                 let c = r.center.clone().unwrap_or_default();
                 let rad = r.radius.unwrap_or(0.0);
-                (c.iter().map(|x| x - rad).collect(), c.iter().map(|x| x + rad).collect())
+                (
+                    c.iter().map(|x| x - rad).collect(),
+                    c.iter().map(|x| x + rad).collect(),
+                )
             }
         }
     }
@@ -510,16 +599,17 @@ impl Case {
     /// Build the simulation (particles, first evaluation) in dimension D.
     pub fn build<const D: usize>(&self) -> Result<Simulation<D>, CaseError> {
         if D != self.case.dimension {
-            return Err(CaseError(format!("case.dimension = {} but built in {D}D", self.case.dimension)));
+            return Err(CaseError(format!(
+                "case.dimension = {} but built in {D}D",
+                self.case.dimension
+            )));
         }
         let mut lo = [0.0; D];
         let mut hi = [0.0; D];
         let mut kind = [BoundaryKind::Open; D];
-        for k in 0..D {
-            lo[k] = self.domain.min[k];
-            hi[k] = self.domain.max[k];
-            kind[k] = self.domain.boundary[k];
-        }
+        lo.copy_from_slice(&self.domain.min);
+        hi.copy_from_slice(&self.domain.max);
+        kind.copy_from_slice(&self.domain.boundary);
         let domain = Domain { lo, hi, kind };
         let eta = self.eta()?;
         let kernel = DimKernel::<D>::new(self.kernel()?);
@@ -538,8 +628,14 @@ impl Case {
                 )));
             }
         }
-        let h_max = match (0..D).filter(|&k| kind[k] != BoundaryKind::Open).map(|k| hi[k] - lo[k]).reduce(f64::min) {
-            Some(l) => h_max.min(0.99 * l / (2.0 * crate::kernel::SUPPORT * (1.0 + crate::scheme::smoothing::SKIN))),
+        let h_max = match (0..D)
+            .filter(|&k| kind[k] != BoundaryKind::Open)
+            .map(|k| hi[k] - lo[k])
+            .reduce(f64::min)
+        {
+            Some(l) => h_max.min(
+                0.99 * l / (2.0 * crate::kernel::SUPPORT * (1.0 + crate::scheme::smoothing::SKIN)),
+            ),
             None => h_max,
         };
         let mut gravity = crate::particles::Vector::<D>::zeros();
@@ -561,7 +657,12 @@ impl Case {
             neighbours: Default::default(),
             stats: Default::default(),
         };
-        Simulation::new(sys, self.scheme.build::<D>(), self.time.integrator, self.step_control())
-            .map_err(|e: SolverError| CaseError(format!("initial state: {e}")))
+        Simulation::new(
+            sys,
+            self.scheme.build::<D>(),
+            self.time.integrator,
+            self.step_control(),
+        )
+        .map_err(|e: SolverError| CaseError(format!("initial state: {e}")))
     }
 }

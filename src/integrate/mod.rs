@@ -89,7 +89,10 @@ fn enforce_boundaries<const D: usize>(sys: &mut System<D>) {
 
 impl<const D: usize> Integrator<D> {
     pub fn new(kind: IntegratorKind) -> Self {
-        Self { kind, saved: Saved::default() }
+        Self {
+            kind,
+            saved: Saved::default(),
+        }
     }
 
     /// Advance by dt. On entry the particles hold the derivatives of the current state

@@ -55,7 +55,10 @@ pub fn write_vtu<const D: usize>(path: &Path, p: &Particles<D>, time: f64) -> io
         ("sound_speed", &p.sound_speed),
     ];
     for (name, data) in scalars {
-        let _ = writeln!(s, "<DataArray type=\"Float64\" Name=\"{name}\" format=\"ascii\">");
+        let _ = writeln!(
+            s,
+            "<DataArray type=\"Float64\" Name=\"{name}\" format=\"ascii\">"
+        );
         for v in data.iter() {
             let _ = write!(s, "{v:e} ");
         }
@@ -83,8 +86,20 @@ pub fn write_csv<const D: usize>(path: &Path, p: &Particles<D>) -> io::Result<()
         let _ = writeln!(
             s,
             "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{}",
-            x(0), x(1), x(2), v(0), v(1), v(2),
-            p.mass[i], p.h[i], p.rho[i], p.u[i], p.pressure[i], p.sound_speed[i], p.id[i], p.material[i]
+            x(0),
+            x(1),
+            x(2),
+            v(0),
+            v(1),
+            v(2),
+            p.mass[i],
+            p.h[i],
+            p.rho[i],
+            p.u[i],
+            p.pressure[i],
+            p.sound_speed[i],
+            p.id[i],
+            p.material[i]
         );
     }
     write_atomic(path, s.as_bytes())
@@ -97,7 +112,8 @@ pub struct DiagnosticsWriter {
 }
 
 impl DiagnosticsWriter {
-    pub const HEADER: &'static str = "time,step,dt,particles,mass,px,py,pz,Lx,Ly,Lz,kinetic,internal,total";
+    pub const HEADER: &'static str =
+        "time,step,dt,particles,mass,px,py,pz,Lx,Ly,Lz,kinetic,internal,total";
 
     pub fn create(path: &Path) -> io::Result<Self> {
         let mut file = io::BufWriter::new(std::fs::File::create(path)?);

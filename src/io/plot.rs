@@ -13,12 +13,18 @@ pub struct Panel<'a> {
 
 fn register_font() {
     // Registration is idempotent; plotters keeps the bytes in its own table.
-    let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
+    let _ =
+        plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
 }
 
 fn bounds(pts: &[(f64, f64)], other: &[(f64, f64)]) -> (f64, f64, f64, f64) {
     let all = pts.iter().chain(other.iter());
-    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    let (mut x0, mut x1, mut y0, mut y1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
     for &(x, y) in all {
         if x.is_finite() && y.is_finite() {
             x0 = x0.min(x);
@@ -37,7 +43,9 @@ pub fn profile_png(path: &Path, caption: &str, panels: &[Panel<'_>]) -> Result<(
     let rows = panels.len().div_ceil(2) as u32;
     let root = BitMapBackend::new(path, (1200, 40 + 380 * rows)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let root = root.titled(caption, ("sans-serif", 24)).map_err(|e| e.to_string())?;
+    let root = root
+        .titled(caption, ("sans-serif", 24))
+        .map_err(|e| e.to_string())?;
     let areas = root.split_evenly((rows as usize, 2));
     for (panel, area) in panels.iter().zip(areas.iter()) {
         let (x0, x1, y0, y1) = bounds(panel.particles, panel.exact);
@@ -48,14 +56,26 @@ pub fn profile_png(path: &Path, caption: &str, panels: &[Panel<'_>]) -> Result<(
             .y_label_area_size(60)
             .build_cartesian_2d(x0..x1, y0..y1)
             .map_err(|e| e.to_string())?;
-        chart.configure_mesh().x_desc("x").draw().map_err(|e| e.to_string())?;
         chart
-            .draw_series(panel.particles.iter().map(|&(x, y)| Circle::new((x, y), 2, BLUE.filled())))
+            .configure_mesh()
+            .x_desc("x")
+            .draw()
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(
+                panel
+                    .particles
+                    .iter()
+                    .map(|&(x, y)| Circle::new((x, y), 2, BLUE.filled())),
+            )
             .map_err(|e| e.to_string())?
             .label("sphfmu")
             .legend(|(x, y)| Circle::new((x, y), 3, BLUE.filled()));
         chart
-            .draw_series(LineSeries::new(panel.exact.iter().copied(), RED.stroke_width(2)))
+            .draw_series(LineSeries::new(
+                panel.exact.iter().copied(),
+                RED.stroke_width(2),
+            ))
             .map_err(|e| e.to_string())?
             .label("exact")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED.stroke_width(2)));

@@ -63,14 +63,36 @@ macro_rules! bspline_kernel {
 // table; for M5 computed symbolically: 1D 1, 2D 96·24/(1199π), 3D 24/(20π)). Rosswog's M4 shape
 // ¼(2−q)³ − (1−q)³ is 3/2 of ours, hence his 2/3, 10/(7π), 1/π. Every value is checked against
 // quadrature in tests/kernels.rs.
-bspline_kernel!(
-    CubicSplineM4,
-    3,
-    6.0,
-    [1.0, 15.0 / (7.0 * PI), 3.0 / (2.0 * PI)],
-    1.2,
-    "M4 cubic spline"
-);
+/// B-spline kernel M4 (cubic) stretched to support 2h (its native support): written out
+/// piecewise because it is the default kernel and the generic mirrored sum is slower.
+/// Shape (1/6)[(2−q)³ − 4(1−q)³] = Rosswog's w4 × 2/3, so σ = 1, 15/(7π), 3/(2π).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct CubicSplineM4;
+
+impl Kernel for CubicSplineM4 {
+    #[inline(always)]
+    fn shape(&self, q: f64) -> (f64, f64) {
+        if q >= 2.0 {
+            (0.0, 0.0)
+        } else if q >= 1.0 {
+            let t = 2.0 - q;
+            (t * t * t / 6.0, -0.5 * t * t)
+        } else {
+            // (2−q)³/6 − 4(1−q)³/6 = 2/3 − q² + q³/2
+            (2.0 / 3.0 - q * q + 0.5 * q * q * q, q * (1.5 * q - 2.0))
+        }
+    }
+    fn sigma(&self, dim: usize) -> f64 {
+        [1.0, 15.0 / (7.0 * PI), 3.0 / (2.0 * PI)][dim - 1]
+    }
+    fn default_eta(&self) -> f64 {
+        1.2
+    }
+    fn name(&self) -> String {
+        "M4 cubic spline".to_string()
+    }
+}
+
 bspline_kernel!(
     QuarticSplineM5,
     4,

@@ -219,6 +219,17 @@ impl<const D: usize> DimKernel<D> {
         }
     }
 
+    /// ∂W/∂r only (force loops need no value or h-derivative).
+    #[inline(always)]
+    pub fn dwdr(&self, r: f64, h: f64) -> f64 {
+        let hinv = 1.0 / h;
+        let q = r * hinv;
+        if q >= SUPPORT {
+            return 0.0;
+        }
+        self.sigma * Self::hinv_pow(h) * hinv * self.kernel.shape(q).1
+    }
+
     /// W(0, h): the self-contribution.
     #[inline(always)]
     pub fn w0(&self, h: f64) -> f64 {

@@ -36,14 +36,46 @@ macro_rules! wendland_kernel {
 }
 
 // ψ = (1−x)⁴(1+4x); ψ' = −20x(1−x)³
-wendland_kernel!(WendlandC2, "Wendland C2", [1.5, 7.0 / PI, 21.0 / (2.0 * PI)], 1.6,
-    |x, om| { let o2 = om * om; o2 * o2 * (1.0 + 4.0 * x) },
-    { -20.0 * x * om * om * om });
+wendland_kernel!(
+    WendlandC2,
+    "Wendland C2",
+    [1.5, 7.0 / PI, 21.0 / (2.0 * PI)],
+    1.6,
+    |x, om| {
+        let o2 = om * om;
+        o2 * o2 * (1.0 + 4.0 * x)
+    },
+    { -20.0 * x * om * om * om }
+);
 // ψ = (1−x)⁶(1+6x+35/3 x²); ψ' = −(56/3) x (1+5x)(1−x)⁵
-wendland_kernel!(WendlandC4, "Wendland C4", [27.0 / 16.0, 9.0 / PI, 495.0 / (32.0 * PI)], 1.9,
-    |x, om| { let o2 = om * om; o2 * o2 * o2 * (1.0 + x * (6.0 + x * 35.0 / 3.0)) },
-    { let o2 = om * om; -(56.0 / 3.0) * x * (1.0 + 5.0 * x) * o2 * o2 * om });
+wendland_kernel!(
+    WendlandC4,
+    "Wendland C4",
+    [27.0 / 16.0, 9.0 / PI, 495.0 / (32.0 * PI)],
+    1.9,
+    |x, om| {
+        let o2 = om * om;
+        o2 * o2 * o2 * (1.0 + x * (6.0 + x * 35.0 / 3.0))
+    },
+    {
+        let o2 = om * om;
+        -(56.0 / 3.0) * x * (1.0 + 5.0 * x) * o2 * o2 * om
+    }
+);
 // ψ = (1−x)⁸(32x³+25x²+8x+1); ψ' = −22x(16x²+7x+1)(1−x)⁷ (Rosswog Eq. 33, [CHECKED])
-wendland_kernel!(WendlandC6, "Wendland C6", [15.0 / 8.0, 78.0 / (7.0 * PI), 1365.0 / (64.0 * PI)], 2.2,
-    |x, om| { let o2 = om * om; let o4 = o2 * o2; o4 * o4 * (1.0 + x * (8.0 + x * (25.0 + 32.0 * x))) },
-    { let o2 = om * om; let o4 = o2 * o2; -22.0 * x * (1.0 + x * (7.0 + 16.0 * x)) * o4 * o2 * om });
+wendland_kernel!(
+    WendlandC6,
+    "Wendland C6",
+    [15.0 / 8.0, 78.0 / (7.0 * PI), 1365.0 / (64.0 * PI)],
+    2.2,
+    |x, om| {
+        let o2 = om * om;
+        let o4 = o2 * o2;
+        o4 * o4 * (1.0 + x * (8.0 + x * (25.0 + 32.0 * x)))
+    },
+    {
+        let o2 = om * om;
+        let o4 = o2 * o2;
+        -22.0 * x * (1.0 + x * (7.0 + 16.0 * x)) * o4 * o2 * om
+    }
+);

@@ -22,7 +22,10 @@ pub fn pack(index: usize, code: ImageCode) -> u32 {
 
 #[inline(always)]
 pub fn unpack(entry: u32) -> (usize, ImageCode) {
-    ((entry & INDEX_MASK) as usize, (entry >> INDEX_BITS) as ImageCode)
+    (
+        (entry & INDEX_MASK) as usize,
+        (entry >> INDEX_BITS) as ImageCode,
+    )
 }
 
 /// Uniform cell grid over the particles' bounding box (the domain on periodic axes).
@@ -40,7 +43,14 @@ pub struct CellGrid<const D: usize> {
 
 impl<const D: usize> Default for CellGrid<D> {
     fn default() -> Self {
-        Self { origin: [0.0; D], cell: 1.0, dims: [1; D], periodic: [false; D], sorted: vec![], cell_start: vec![0, 0] }
+        Self {
+            origin: [0.0; D],
+            cell: 1.0,
+            dims: [1; D],
+            periodic: [false; D],
+            sorted: vec![],
+            cell_start: vec![0, 0],
+        }
     }
 }
 

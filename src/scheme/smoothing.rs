@@ -105,7 +105,14 @@ fn solve_one<const D: usize>(sys: &System<D>, a: usize, h_reach: f64) -> HSolve 
         // Converged: the summation density and the h-implied density agree.
         if (f / rho).abs() < DENSITY_TOLERANCE || it >= MAX_NEWTON {
             let omega = 1.0 + h / (D as f64 * rho) * drho_dh;
-            return HSolve { h, rho, omega, iterations: it as u32, needs_rebuild: false, capped: false };
+            return HSolve {
+                h,
+                rho,
+                omega,
+                iterations: it as u32,
+                needs_rebuild: false,
+                capped: false,
+            };
         }
         // f is increasing in h where the solution is unique (ρ_h falls as h^-D); bracket it.
         if f < 0.0 {
@@ -117,7 +124,11 @@ fn solve_one<const D: usize>(sys: &System<D>, a: usize, h_reach: f64) -> HSolve 
         let mut h_new = if df > 0.0 { h - f / df } else { f64::NAN };
         if !(h_new.is_finite() && h_new > lo && h_new < hi) || h_new > 1.5 * h || h_new < 0.6 * h {
             // Newton left the bracket or stepped too far: bisect (geometric when unbounded).
-            h_new = if hi.is_finite() { 0.5 * (lo + hi) } else { (1.3 * h).max(lo * 1.3) };
+            h_new = if hi.is_finite() {
+                0.5 * (lo + hi)
+            } else {
+                (1.3 * h).max(lo * 1.3)
+            };
             if lo == 0.0 && f > 0.0 {
                 h_new = 0.8 * h;
             }

@@ -60,7 +60,10 @@ impl StandardParams {
         check_range("scheme.beta", self.beta, 0.0, 20.0)?;
         check_range("scheme.conductivity", self.conductivity, 0.0, 5.0)?;
         if !(self.epsilon > 0.0 && self.epsilon <= 1.0) {
-            return Err(format!("scheme.epsilon: must be in (0, 1], got {}", self.epsilon));
+            return Err(format!(
+                "scheme.epsilon: must be in (0, 1], got {}",
+                self.epsilon
+            ));
         }
         Ok(())
     }
@@ -74,7 +77,10 @@ pub struct StandardSph {
 
 impl StandardSph {
     pub fn new(params: StandardParams) -> Self {
-        Self { params, balsara_slot: usize::MAX }
+        Self {
+            params,
+            balsara_slot: usize::MAX,
+        }
     }
 }
 
@@ -87,7 +93,10 @@ struct GradAcc<const D: usize> {
 
 impl<const D: usize> Default for GradAcc<D> {
     fn default() -> Self {
-        Self { div: 0.0, grad: nalgebra::SMatrix::zeros() }
+        Self {
+            div: 0.0,
+            grad: nalgebra::SMatrix::zeros(),
+        }
     }
 }
 
@@ -100,7 +109,11 @@ struct ForceAcc<const D: usize> {
 
 impl<const D: usize> Default for ForceAcc<D> {
     fn default() -> Self {
-        Self { acc: Vector::zeros(), dudt: 0.0, vsig: 0.0 }
+        Self {
+            acc: Vector::zeros(),
+            dudt: 0.0,
+            vsig: 0.0,
+        }
     }
 }
 
@@ -141,9 +154,9 @@ impl<const D: usize> Scheme<D> for StandardSph {
             let p = &sys.particles;
             let k = &sys.kernel;
             sys.gather(&mut grads, |a, g, pr| {
-                let ev = k.eval(pr.r, p.h[a]);
-                if pr.r > 0.0 && ev.dwdr != 0.0 {
-                    let gw = pr.dx * (ev.dwdr / pr.r);
+                let dwdr = k.dwdr(pr.r, p.h[a]);
+                if pr.r > 0.0 && dwdr != 0.0 {
+                    let gw = pr.dx * (dwdr / pr.r);
                     let vab = p.vel[a] - pr.vb;
                     g.div += p.mass[pr.b] * vab.dot(&gw);
                     g.grad += p.mass[pr.b] * vab * gw.transpose();
@@ -180,6 +193,14 @@ impl<const D: usize> Scheme<D> for StandardSph {
         let prm = self.params;
         let slot = self.balsara_slot;
         let mut out = vec![ForceAcc::<D>::default(); n];
+        // P/(Ω ρ²) per particle, computed once rather than per pair.
+        let pterm: Vec<f64> = {
+            let p = &sys.particles;
+            (0..n)
+                .into_par_iter()
+                .map(|a| p.pressure[a] / (p.omega[a] * p.rho[a] * p.rho[a]))
+                .collect()
+        };
         {
             let p = &sys.particles;
             let k = &sys.kernel;
@@ -189,14 +210,13 @@ impl<const D: usize> Scheme<D> for StandardSph {
                 if pr.r <= 0.0 {
                     return;
                 }
-                let ea = k.eval(pr.r, p.h[a]);
-                let eb = k.eval(pr.r, p.h[b]);
-                let rhat = pr.dx / pr.r;
+                let rinv = 1.0 / pr.r;
+                let rhat = pr.dx * rinv;
                 // ∇_a W_ab(h) = dW/dr · r̂_ab
-                let fa = ea.dwdr;
-                let fb = eb.dwdr;
-                let pa = p.pressure[a] / (p.omega[a] * p.rho[a] * p.rho[a]);
-                let pb = p.pressure[b] / (p.omega[b] * p.rho[b] * p.rho[b]);
+                let fa = k.dwdr(pr.r, p.h[a]);
+                let fb = k.dwdr(pr.r, p.h[b]);
+                let pa = pterm[a];
+                let pb = pterm[b];
                 let mb = p.mass[b];
                 let vab = p.vel[a] - pr.vb;
                 let w = vab.dot(&rhat);

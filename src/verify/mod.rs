@@ -9,7 +9,11 @@ pub fn l1_error(samples: &[(f64, f64)], exact: impl Fn(f64) -> f64) -> f64 {
     if samples.is_empty() {
         return f64::NAN;
     }
-    samples.iter().map(|&(x, q)| (q - exact(x)).abs()).sum::<f64>() / samples.len() as f64
+    samples
+        .iter()
+        .map(|&(x, q)| (q - exact(x)).abs())
+        .sum::<f64>()
+        / samples.len() as f64
 }
 
 /// Errors of a 1D shock-tube profile against the exact Riemann solution.
@@ -31,9 +35,17 @@ pub fn shock_tube_errors(
     x_lo: f64,
     x_hi: f64,
 ) -> ShockTubeErrors {
-    let sel: Vec<_> = particles.iter().filter(|p| p.0 >= x_lo && p.0 <= x_hi).collect();
+    let sel: Vec<_> = particles
+        .iter()
+        .filter(|p| p.0 >= x_lo && p.0 <= x_hi)
+        .collect();
     let n = sel.len().max(1) as f64;
-    let mut e = ShockTubeErrors { l1_density: 0.0, l1_velocity: 0.0, l1_pressure: 0.0, particles: sel.len() };
+    let mut e = ShockTubeErrors {
+        l1_density: 0.0,
+        l1_velocity: 0.0,
+        l1_pressure: 0.0,
+        particles: sel.len(),
+    };
     for &&(x, rho, v, p) in &sel {
         let ex: Primitive = rs.at(x, x0, t);
         e.l1_density += (rho - ex.rho).abs() / n;

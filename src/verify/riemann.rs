@@ -27,12 +27,32 @@ impl ExactRiemann {
             return Err(format!("gamma: must be > 1, got {gamma}"));
         }
         for (name, s) in [("left", left), ("right", right)] {
-            if !(s.rho >= 0.0 && s.p >= 0.0 && s.u.is_finite() && s.rho.is_finite() && s.p.is_finite()) {
-                return Err(format!("{name} state: need ρ ≥ 0, P ≥ 0 and finite values, got {s:?}"));
+            if !(s.rho >= 0.0
+                && s.p >= 0.0
+                && s.u.is_finite()
+                && s.rho.is_finite()
+                && s.p.is_finite())
+            {
+                return Err(format!(
+                    "{name} state: need ρ ≥ 0, P ≥ 0 and finite values, got {s:?}"
+                ));
             }
         }
-        let mut rs = Self { left, right, gamma, p_star: 0.0, u_star: f64::NAN, vacuum: false };
-        let c = |s: Primitive| if s.rho > 0.0 { (gamma * s.p / s.rho).sqrt() } else { 0.0 };
+        let mut rs = Self {
+            left,
+            right,
+            gamma,
+            p_star: 0.0,
+            u_star: f64::NAN,
+            vacuum: false,
+        };
+        let c = |s: Primitive| {
+            if s.rho > 0.0 {
+                (gamma * s.p / s.rho).sqrt()
+            } else {
+                0.0
+            }
+        };
         let (cl, cr) = (c(left), c(right));
         let g1 = gamma - 1.0;
         if left.rho == 0.0 || right.rho == 0.0 || 2.0 * (cl + cr) / g1 <= right.u - left.u {
@@ -84,20 +104,38 @@ impl ExactRiemann {
     pub fn sample(&self, xi: f64) -> Primitive {
         let g = self.gamma;
         let (l, r) = (self.left, self.right);
-        let c = |s: Primitive| if s.rho > 0.0 { (g * s.p / s.rho).sqrt() } else { 0.0 };
+        let c = |s: Primitive| {
+            if s.rho > 0.0 {
+                (g * s.p / s.rho).sqrt()
+            } else {
+                0.0
+            }
+        };
         let (cl, cr) = (c(l), c(r));
         let g1 = g - 1.0;
         let gp = g + 1.0;
         // Left rarefaction fan state at ξ (Toro 4.56).
         let fan_l = |xi: f64| {
             let f = 2.0 / gp + g1 / (gp * cl) * (l.u - xi);
-            Primitive { rho: l.rho * f.powf(2.0 / g1), u: 2.0 / gp * (cl + 0.5 * g1 * l.u + xi), p: l.p * f.powf(2.0 * g / g1) }
+            Primitive {
+                rho: l.rho * f.powf(2.0 / g1),
+                u: 2.0 / gp * (cl + 0.5 * g1 * l.u + xi),
+                p: l.p * f.powf(2.0 * g / g1),
+            }
         };
         let fan_r = |xi: f64| {
             let f = 2.0 / gp - g1 / (gp * cr) * (r.u - xi);
-            Primitive { rho: r.rho * f.powf(2.0 / g1), u: 2.0 / gp * (-cr + 0.5 * g1 * r.u + xi), p: r.p * f.powf(2.0 * g / g1) }
+            Primitive {
+                rho: r.rho * f.powf(2.0 / g1),
+                u: 2.0 / gp * (-cr + 0.5 * g1 * r.u + xi),
+                p: r.p * f.powf(2.0 * g / g1),
+            }
         };
-        let vac = Primitive { rho: 0.0, u: 0.0, p: 0.0 };
+        let vac = Primitive {
+            rho: 0.0,
+            u: 0.0,
+            p: 0.0,
+        };
         if self.vacuum {
             // Toro §4.6: right vacuum, left vacuum, or generated vacuum.
             if r.rho == 0.0 && l.rho == 0.0 {
@@ -106,12 +144,24 @@ impl ExactRiemann {
             if r.rho == 0.0 {
                 let s_head = l.u - cl;
                 let s_tail = l.u + 2.0 * cl / g1;
-                return if xi <= s_head { l } else if xi < s_tail { fan_l(xi) } else { vac };
+                return if xi <= s_head {
+                    l
+                } else if xi < s_tail {
+                    fan_l(xi)
+                } else {
+                    vac
+                };
             }
             if l.rho == 0.0 {
                 let s_head = r.u + cr;
                 let s_tail = r.u - 2.0 * cr / g1;
-                return if xi >= s_head { r } else if xi > s_tail { fan_r(xi) } else { vac };
+                return if xi >= s_head {
+                    r
+                } else if xi > s_tail {
+                    fan_r(xi)
+                } else {
+                    vac
+                };
             }
             let sl_tail = l.u + 2.0 * cl / g1;
             let sr_tail = r.u - 2.0 * cr / g1;
@@ -144,7 +194,11 @@ impl ExactRiemann {
                 if xi <= head {
                     l
                 } else if xi >= tail {
-                    Primitive { rho: l.rho * (ps / l.p).powf(1.0 / g), u: us, p: ps }
+                    Primitive {
+                        rho: l.rho * (ps / l.p).powf(1.0 / g),
+                        u: us,
+                        p: ps,
+                    }
                 } else {
                     fan_l(xi)
                 }
@@ -164,7 +218,11 @@ impl ExactRiemann {
             if xi >= head {
                 r
             } else if xi <= tail {
-                Primitive { rho: r.rho * (ps / r.p).powf(1.0 / g), u: us, p: ps }
+                Primitive {
+                    rho: r.rho * (ps / r.p).powf(1.0 / g),
+                    u: us,
+                    p: ps,
+                }
             } else {
                 fan_r(xi)
             }
