@@ -51,6 +51,9 @@ enum Command {
         #[arg(long)]
         build: bool,
     },
+    /// Kernel table: normalisations, η, neighbours, and the lattice quality indicators Q1–Q4
+    /// and the standard-gradient error on a periodic 2D hexagonal lattice (Rosswog §2, §3.6).
+    Kernels,
     /// Measure particle-updates/s and pair-interactions/s on periodic boxes.
     Bench {
         /// Particle counts
@@ -101,6 +104,21 @@ fn main() -> ExitCode {
         }
     };
     match cli.command {
+        Command::Kernels => {
+            use sphfmu::kernel::{neighbours_for_eta, AnyKernel, Kernel};
+            println!("| kernel | σ 1D | σ 2D | σ 3D | η | neighbours 2D | 3D | Q1 = ε_ρ | Q2/r_s | Q3·r_s | Q4 | ∇x error |");
+            println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+            for k in AnyKernel::all() {
+                let eta = k.default_eta();
+                let q = sphfmu::verify::lattice::hex_quality(k, eta);
+                println!(
+                    "| {} | {:.6} | {:.6} | {:.6} | {eta} | {:.0} | {:.0} | {:.2e} | {:.1e} | {:.1e} | {:.2e} | {:.2e} |",
+                    q.kernel, k.sigma(1), k.sigma(2), k.sigma(3), neighbours_for_eta(eta, 2), neighbours_for_eta(eta, 3),
+                    q.q1, q.q2, q.q3, q.q4, q.gradient_error
+                );
+            }
+            ExitCode::SUCCESS
+        }
         Command::Check { case, build } => match Case::load(&case) {
             Ok(c) => {
                 if build {

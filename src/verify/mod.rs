@@ -1,5 +1,6 @@
 //! Verification against exact solutions, shared by tests, the CLI and tools.
 
+pub mod lattice;
 pub mod riemann;
 
 use riemann::{ExactRiemann, Primitive};
