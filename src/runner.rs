@@ -85,6 +85,9 @@ pub struct RunSummary {
     pub plot: Option<PathBuf>,
     /// Wall-clock seconds per phase: neighbour lists, density/h, gradients, forces.
     pub phase_seconds: [f64; 4],
+    /// Mean density evaluations per particle per h solve, and master-list builds.
+    pub mean_h_iterations: f64,
+    pub neighbour_list_builds: u64,
 }
 
 /// Run `case` writing into `out`. `progress` is called after every step.
@@ -235,6 +238,8 @@ fn run_dim<const D: usize>(
                 st.seconds_forces,
             ]
         },
+        mean_h_iterations: sim.sys.stats.h_iterations_total / sim.sys.stats.h_solves.max(1) as f64,
+        neighbour_list_builds: sim.sys.verlet.builds,
     };
     if let Some(v) = &case.verify {
         verify_riemann(case, v, &sim, out, &mut summary)?;

@@ -233,9 +233,7 @@ impl<const D: usize> Simulation<D> {
     pub fn reorder(&mut self) {
         let perm = self.sys.grid.sorted.clone();
         if perm.len() == self.sys.particles.len() {
-            self.sys.particles.permute(&perm);
-            // Lists refer to old indices.
-            self.sys.invalidate_neighbours();
+            self.sys.permute_particles(&perm);
         }
     }
 

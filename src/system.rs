@@ -17,8 +17,12 @@ pub struct EvalStats {
     pub total_pairs: u64,
     /// Neighbour-list rebuilds caused by growing smoothing lengths.
     pub list_rebuilds: u64,
-    /// Mean Newton–Raphson iterations per particle in the smoothing-length solve.
+    /// Mean Newton–Raphson iterations per particle in the latest smoothing-length solve.
     pub h_iterations: f64,
+    /// Density evaluations per particle summed over all solves (for run statistics).
+    pub h_iterations_total: f64,
+    /// Smoothing-length solves (evaluations and refreshes).
+    pub h_solves: u64,
     /// Particles whose h hit the cap `h_max`.
     pub h_capped: u64,
     /// Wall-clock seconds spent per phase since the counters were last reset
@@ -143,7 +147,25 @@ impl<const D: usize> System<D> {
         self.stats.seconds_neighbours += t0.elapsed().as_secs_f64();
     }
 
-    /// Forget the lists (after particles were reordered, added or removed).
+    /// Reorder the particles (new index i = old index `perm[i]`) and carry the master list,
+    /// its build positions and radii along, so a reorder costs no rebuild.
+    pub fn permute_particles(&mut self, perm: &[u32]) {
+        self.particles.permute(perm);
+        let v = &mut self.verlet;
+        if v.pos.len() == perm.len() && v.list.offsets.len() == perm.len() + 1 {
+            v.list = v.list.permuted(perm);
+            v.pos = perm.iter().map(|&i| v.pos[i as usize]).collect();
+            v.reach = perm.iter().map(|&i| v.reach[i as usize]).collect();
+        } else {
+            *v = VerletList {
+                builds: v.builds,
+                ..Default::default()
+            };
+        }
+        self.neighbours = NeighbourList::default();
+    }
+
+    /// Forget the lists (after particles were added or removed).
     pub fn invalidate_neighbours(&mut self) {
         self.verlet = VerletList::default();
         self.neighbours = NeighbourList::default();

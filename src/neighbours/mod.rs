@@ -355,6 +355,35 @@ impl NeighbourList {
         Self::concat(n, parts)
     }
 
+    /// The same lists after the particles were reordered so that new index i is old index
+    /// `perm[i]` (rows moved, neighbour indices renamed, image codes kept).
+    pub fn permuted(&self, perm: &[u32]) -> Self {
+        let n = perm.len();
+        let mut inv = vec![0u32; n];
+        for (new, &old) in perm.iter().enumerate() {
+            inv[old as usize] = new as u32;
+        }
+        const CHUNK: usize = 1024;
+        let parts: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|chunk| {
+                let (start, end) = (chunk * CHUNK, ((chunk + 1) * CHUNK).min(n));
+                let mut counts = Vec::with_capacity(end - start);
+                let mut out = Vec::new();
+                for &old in &perm[start..end] {
+                    let row = self.of(old as usize);
+                    out.extend(row.iter().map(|&e| {
+                        let (b, code) = unpack(e);
+                        pack(inv[b] as usize, code)
+                    }));
+                    counts.push(row.len() as u32);
+                }
+                (counts, out)
+            })
+            .collect();
+        Self::concat(n, parts)
+    }
+
     fn concat(n: usize, parts: Vec<(Vec<u32>, Vec<u32>)>) -> Self {
         let mut offsets = Vec::with_capacity(n + 1);
         offsets.push(0usize);

@@ -66,6 +66,8 @@ pub fn solve_density_and_h<const D: usize>(sys: &mut System<D>) {
     }
     sys.stats.list_rebuilds += rebuilds;
     sys.stats.h_iterations = iters as f64 / sys.particles.len().max(1) as f64;
+    sys.stats.h_iterations_total += sys.stats.h_iterations;
+    sys.stats.h_solves += 1;
     sys.stats.total_pairs += (sys.verlet.list.total_pairs() as f64 * sys.stats.h_iterations) as u64;
     sys.compact_neighbours();
 }
