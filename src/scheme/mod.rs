@@ -2,6 +2,7 @@
 //! driver and the integrators never know which scheme runs. Each formulation lives in its own
 //! module behind [`Scheme`]; all of them loop over pairs through [`System::gather`].
 
+pub mod rpsph;
 pub mod smoothing;
 pub mod standard;
 
@@ -36,20 +37,24 @@ pub trait Scheme<const D: usize>: Send + Sync {
 pub enum SchemeConfig {
     /// Traditional grad-h SPH with Monaghan–Gingold viscosity (see [`standard`]).
     Standard(standard::StandardParams),
+    /// Relative-pressure SPH (Abel 2011), see [`rpsph`].
+    Rpsph(rpsph::RpsphParams),
 }
 
 /// Scheme names accepted in `scheme.name`.
-pub const SCHEME_NAMES: &str = "standard";
+pub const SCHEME_NAMES: &str = "standard, rpsph";
 
 impl SchemeConfig {
     pub fn validate(&self) -> Result<(), String> {
         match self {
             SchemeConfig::Standard(p) => p.validate(),
+            SchemeConfig::Rpsph(p) => p.validate(),
         }
     }
     pub fn build<const D: usize>(&self) -> Box<dyn Scheme<D>> {
         match *self {
             SchemeConfig::Standard(p) => Box::new(standard::StandardSph::new(p)),
+            SchemeConfig::Rpsph(p) => Box::new(rpsph::Rpsph::new(p)),
         }
     }
 }

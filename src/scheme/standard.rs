@@ -145,123 +145,178 @@ impl<const D: usize> Scheme<D> for StandardSph {
     fn evaluate(&mut self, sys: &mut System<D>) -> Result<(), SchemeError> {
         smoothing::solve_density_and_h(sys);
         sys.update_eos();
-        let n = sys.particles.len();
-
-        // Pass 1: velocity gradient (SPH estimate with grad-h): ∂v^i/∂x^j = −1/(Ω ρ) Σ m_b v_ab^i ∂_j W(h_a).
-        let t0 = std::time::Instant::now();
-        let mut grads = vec![GradAcc::<D>::default(); n];
-        if self.params.balsara && D > 1 {
-            let p = &sys.particles;
-            let k = &sys.kernel;
-            sys.gather(&mut grads, |a, g, pr| {
-                let dwdr = k.dwdr(pr.r, p.h[a]);
-                if pr.r > 0.0 && dwdr != 0.0 {
-                    let gw = pr.dx * (dwdr / pr.r);
-                    let vab = p.vel[a] - pr.vb;
-                    g.div += p.mass[pr.b] * vab.dot(&gw);
-                    g.grad += p.mass[pr.b] * vab * gw.transpose();
-                }
-            });
-            sys.stats.total_pairs += sys.neighbours.total_pairs() as u64;
-        }
-        {
-            let use_balsara = self.params.balsara && D > 1;
-            let p = &mut sys.particles;
-            let (omega, rho, cs, h) = (&p.omega, &p.rho, &p.sound_speed, &p.h);
-            p.div_v
-                .par_iter_mut()
-                .zip(p.curl_v.par_iter_mut())
-                .zip(p.extra_scalars[self.balsara_slot].par_iter_mut())
-                .enumerate()
-                .for_each(|(a, ((dv, cv), bal))| {
-                    let s = -1.0 / (omega[a] * rho[a]);
-                    let div = s * grads[a].div;
-                    let curl = s.abs() * curl_norm(&grads[a].grad);
-                    *dv = div;
-                    *cv = curl;
-                    *bal = if use_balsara {
-                        div.abs() / (div.abs() + curl + 1e-4 * cs[a] / h[a] + 1e-300)
-                    } else {
-                        1.0
-                    };
-                });
-        }
-
-        sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
-        let t0 = std::time::Instant::now();
-        // Pass 2: forces and energy.
-        let prm = self.params;
-        let slot = self.balsara_slot;
-        let mut out = vec![ForceAcc::<D>::default(); n];
-        // P/(Ω ρ²) per particle, computed once rather than per pair.
-        let pterm: Vec<f64> = {
-            let p = &sys.particles;
-            (0..n)
-                .into_par_iter()
-                .map(|a| p.pressure[a] / (p.omega[a] * p.rho[a] * p.rho[a]))
-                .collect()
-        };
-        {
-            let p = &sys.particles;
-            let k = &sys.kernel;
-            let bal = &p.extra_scalars[slot];
-            sys.gather(&mut out, |a, o, pr| {
-                let b = pr.b;
-                if pr.r <= 0.0 {
-                    return;
-                }
-                let rinv = 1.0 / pr.r;
-                let rhat = pr.dx * rinv;
-                // ∇_a W_ab(h) = dW/dr · r̂_ab
-                let fa = k.dwdr(pr.r, p.h[a]);
-                let fb = k.dwdr(pr.r, p.h[b]);
-                let pa = pterm[a];
-                let pb = pterm[b];
-                let mb = p.mass[b];
-                let vab = p.vel[a] - pr.vb;
-                let w = vab.dot(&rhat);
-                let fbar = 0.5 * (fa + fb);
-                let mut force = pa * fa + pb * fb; // along r̂, times −m_b below
-                let mut dudt = pa * mb * w * fa;
-                let ca = p.sound_speed[a];
-                let cb = p.sound_speed[b];
-                let vsig = ca + cb - 3.0 * w.min(0.0);
-                o.vsig = o.vsig.max(vsig);
-                let rho_bar = 0.5 * (p.rho[a] + p.rho[b]);
-                if w < 0.0 {
-                    let hbar = 0.5 * (p.h[a] + p.h[b]);
-                    let mu = hbar * w * pr.r / (pr.r * pr.r + prm.epsilon * hbar * hbar);
-                    let alpha = 0.5 * (p.alpha[a] + p.alpha[b]);
-                    let fbal = 0.5 * (bal[a] + bal[b]);
-                    let pi = fbal * (-alpha * 0.5 * (ca + cb) * mu + prm.beta * mu * mu) / rho_bar;
-                    force += pi * fbar;
-                    dudt += 0.5 * mb * pi * w * fbar;
-                }
-                if prm.conductivity > 0.0 {
-                    let vsig_u = ((p.pressure[a] - p.pressure[b]).abs() / rho_bar).sqrt();
-                    dudt += mb * prm.conductivity * vsig_u * (p.u[a] - p.u[b]) * fbar / rho_bar;
-                }
-                o.acc -= (mb * force) * rhat;
-                o.dudt += dudt;
-            });
-        }
-        sys.stats.seconds_forces += t0.elapsed().as_secs_f64();
-        sys.stats.force_pairs = sys.neighbours.total_pairs() as u64;
-        sys.stats.total_pairs += sys.stats.force_pairs;
-        let g = sys.gravity;
-        let p = &mut sys.particles;
-        let cs = &p.sound_speed;
-        p.acc
-            .par_iter_mut()
-            .zip(p.dudt.par_iter_mut())
-            .zip(p.v_sig.par_iter_mut())
-            .zip(out.par_iter())
-            .enumerate()
-            .for_each(|(a, (((acc, du), vs), o))| {
-                *acc = o.acc + g;
-                *du = o.dudt;
-                *vs = o.vsig.max(cs[a]);
-            });
+        velocity_gradients(sys, self.balsara_slot, self.params.balsara);
+        force_pass(sys, &self.params, self.balsara_slot, PressureForm::GradH);
         Ok(())
     }
+}
+
+/// Velocity divergence and |curl| (SPH estimate with grad-h:
+/// ∂v^i/∂x^j = −1/(Ω_a ρ_a) Σ_b m_b v_ab^i ∂_j W_ab(h_a)), and the Balsara factor
+/// f = |∇·v| / (|∇·v| + |∇×v| + 10⁻⁴ c/h) into `extra_scalars[balsara_slot]` (1 when off or 1D).
+pub(crate) fn velocity_gradients<const D: usize>(
+    sys: &mut System<D>,
+    balsara_slot: usize,
+    balsara: bool,
+) {
+    let t0 = std::time::Instant::now();
+    let n = sys.particles.len();
+    let mut grads = vec![GradAcc::<D>::default(); n];
+    {
+        let p = &sys.particles;
+        let k = &sys.kernel;
+        sys.gather(&mut grads, |a, g, pr| {
+            let dwdr = k.dwdr(pr.r, p.h[a]);
+            if pr.r > 0.0 && dwdr != 0.0 {
+                let gw = pr.dx * (dwdr / pr.r);
+                let vab = p.vel[a] - pr.vb;
+                g.div += p.mass[pr.b] * vab.dot(&gw);
+                g.grad += p.mass[pr.b] * vab * gw.transpose();
+            }
+        });
+    }
+    sys.stats.total_pairs += sys.neighbours.total_pairs() as u64;
+    let use_balsara = balsara && D > 1;
+    let p = &mut sys.particles;
+    let (omega, rho, cs, h) = (&p.omega, &p.rho, &p.sound_speed, &p.h);
+    p.div_v
+        .par_iter_mut()
+        .zip(p.curl_v.par_iter_mut())
+        .zip(p.extra_scalars[balsara_slot].par_iter_mut())
+        .enumerate()
+        .for_each(|(a, ((dv, cv), bal))| {
+            let s = -1.0 / (omega[a] * rho[a]);
+            let div = s * grads[a].div;
+            let curl = s.abs() * curl_norm(&grads[a].grad);
+            *dv = div;
+            *cv = curl;
+            *bal = if use_balsara {
+                div.abs() / (div.abs() + curl + 1e-4 * cs[a] / h[a] + 1e-300)
+            } else {
+                1.0
+            };
+        });
+    sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
+}
+
+/// The pressure part of the pair force: the one place where standard SPH and rpSPH differ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum PressureForm {
+    /// Standard grad-h form (Rosswog spec §6.2 with X = m; rpSPH spec eq. 2).
+    GradH,
+    /// rpSPH (Abel 2011, rpSPH spec §1.3): a_a = −Σ m_b (P_b − P_a)/ρ_b² ∇W, with ∇_a W_ab(h_a)
+    /// (eq. 4, `symmetric = false`) or ∇̄W (Appendix B variant, `symmetric = true`); when
+    /// `shock_switch`, particles with −h ∇·v > 3c use GradH (§3.7). Energy: eq. 18 as printed,
+    /// du_a/dt = Σ m_b P_b/ρ_b² v_ab·∇_a W_ab(h_a) — the spec flags ρ_b ρ_b vs ρ_a ρ_b as
+    /// ambiguous; we implement the printed ρ_b² (decision recorded here, in one place).
+    Relative { symmetric: bool, shock_switch: bool },
+}
+
+/// Pair forces, pressure work, artificial viscosity (Monaghan–Gingold with Balsara) and
+/// artificial conductivity; writes acc, dudt and v_sig.
+pub(crate) fn force_pass<const D: usize>(
+    sys: &mut System<D>,
+    prm: &StandardParams,
+    balsara_slot: usize,
+    form: PressureForm,
+) {
+    let t0 = std::time::Instant::now();
+    let n = sys.particles.len();
+    let mut out = vec![ForceAcc::<D>::default(); n];
+    let p = &sys.particles;
+    // Per-particle factors computed once rather than per pair: P/(Ω ρ²) for the standard
+    // form, P/ρ² for rpSPH's energy equation.
+    let pterm_std: Vec<f64> = (0..n)
+        .into_par_iter()
+        .map(|a| p.pressure[a] / (p.omega[a] * p.rho[a] * p.rho[a]))
+        .collect();
+    let pterm_rel: Vec<f64> = match form {
+        PressureForm::GradH => Vec::new(),
+        PressureForm::Relative { .. } => (0..n)
+            .into_par_iter()
+            .map(|a| p.pressure[a] / (p.rho[a] * p.rho[a]))
+            .collect(),
+    };
+    // Which particles use the standard form (all for GradH; with rpSPH's shock switch those
+    // with −h ∇·v > 3c).
+    let standard_here: Vec<bool> = match form {
+        PressureForm::GradH => vec![true; n],
+        PressureForm::Relative { shock_switch, .. } => (0..n)
+            .into_par_iter()
+            .map(|a| shock_switch && -p.h[a] * p.div_v[a] > 3.0 * p.sound_speed[a])
+            .collect(),
+    };
+    {
+        let p = &sys.particles;
+        let k = &sys.kernel;
+        let bal = &p.extra_scalars[balsara_slot];
+        sys.gather(&mut out, |a, o, pr| {
+            let b = pr.b;
+            if pr.r <= 0.0 {
+                return;
+            }
+            let rinv = 1.0 / pr.r;
+            let rhat = pr.dx * rinv;
+            // ∇_a W_ab(h) = dW/dr · r̂_ab
+            let fa = k.dwdr(pr.r, p.h[a]);
+            let fb = k.dwdr(pr.r, p.h[b]);
+            let mb = p.mass[b];
+            let vab = p.vel[a] - pr.vb;
+            let w = vab.dot(&rhat);
+            let fbar = 0.5 * (fa + fb);
+            // pressure force along r̂ (times −m_b below) and pressure work
+            let (mut force, mut dudt) = if standard_here[a] {
+                let (pa, pb) = (pterm_std[a], pterm_std[b]);
+                (pa * fa + pb * fb, pa * mb * w * fa)
+            } else {
+                let symmetric = matches!(
+                    form,
+                    PressureForm::Relative {
+                        symmetric: true,
+                        ..
+                    }
+                );
+                let g = if symmetric { fbar } else { fa };
+                let rel = (p.pressure[b] - p.pressure[a]) / (p.rho[b] * p.rho[b]);
+                (rel * g, pterm_rel[b] * mb * w * fa)
+            };
+            let ca = p.sound_speed[a];
+            let cb = p.sound_speed[b];
+            let vsig = ca + cb - 3.0 * w.min(0.0);
+            o.vsig = o.vsig.max(vsig);
+            let rho_bar = 0.5 * (p.rho[a] + p.rho[b]);
+            if w < 0.0 {
+                let hbar = 0.5 * (p.h[a] + p.h[b]);
+                let mu = hbar * w * pr.r / (pr.r * pr.r + prm.epsilon * hbar * hbar);
+                let alpha = 0.5 * (p.alpha[a] + p.alpha[b]);
+                let fbal = 0.5 * (bal[a] + bal[b]);
+                let pi = fbal * (-alpha * 0.5 * (ca + cb) * mu + prm.beta * mu * mu) / rho_bar;
+                force += pi * fbar;
+                dudt += 0.5 * mb * pi * w * fbar;
+            }
+            if prm.conductivity > 0.0 {
+                let vsig_u = ((p.pressure[a] - p.pressure[b]).abs() / rho_bar).sqrt();
+                dudt += mb * prm.conductivity * vsig_u * (p.u[a] - p.u[b]) * fbar / rho_bar;
+            }
+            o.acc -= (mb * force) * rhat;
+            o.dudt += dudt;
+        });
+    }
+    sys.stats.seconds_forces += t0.elapsed().as_secs_f64();
+    sys.stats.force_pairs = sys.neighbours.total_pairs() as u64;
+    sys.stats.total_pairs += sys.stats.force_pairs;
+    let g = sys.gravity;
+    let p = &mut sys.particles;
+    let cs = &p.sound_speed;
+    p.acc
+        .par_iter_mut()
+        .zip(p.dudt.par_iter_mut())
+        .zip(p.v_sig.par_iter_mut())
+        .zip(out.par_iter())
+        .enumerate()
+        .for_each(|(a, (((acc, du), vs), o))| {
+            *acc = o.acc + g;
+            *du = o.dudt;
+            *vs = o.vsig.max(cs[a]);
+        });
 }
