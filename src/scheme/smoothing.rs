@@ -1,6 +1,8 @@
-//! Smoothing lengths and summation density: h = η (m/ρ)^{1/D} solved by safeguarded
-//! Newton–Raphson per particle to |Δρ|/ρ < 1e-4, and the grad-h factors
-//! Ω_a = 1 + h_a/(D ρ_a) Σ_b m_b ∂W_ab(h_a)/∂h_a (Rosswog spec §6.1, Eq. 51 with X = m).
+//! Smoothing lengths and summation density with generalised volume elements (Rosswog spec
+//! §5, Eqs. 36–38): κ_a = Σ_b X_b W_ab(h_a), V_a = X_a/κ_a, ρ_a = m_a/V_a, h_a = η V_a^{1/D},
+//! solved by safeguarded Newton–Raphson per particle to |Δρ|/ρ < 1e-4, and the grad-h factors
+//! Ω_a = 1 + h_a/(D κ_a) Σ_b X_b ∂W_ab(h_a)/∂h_a (Eq. 51). X = m (the default) is standard
+//! SPH's summation density ρ_a = Σ_b m_b W_ab(h_a).
 
 use crate::neighbours::unpack;
 use crate::system::System;
@@ -24,9 +26,15 @@ struct HSolve {
     capped: bool,
 }
 
-/// Make the neighbour lists valid, solve h and ρ for every particle, compute Ω, then cut
-/// the working list to the final supports.
+/// Make the neighbour lists valid, solve h and ρ for every particle (X = m), compute Ω, then
+/// cut the working list to the final supports.
 pub fn solve_density_and_h<const D: usize>(sys: &mut System<D>) {
+    solve_density_and_h_weighted(sys, None)
+}
+
+/// As [`solve_density_and_h`] with volume weights X (`None`: X = m). X is held fixed during
+/// the solve (Rosswog §7.2: P, and so X = P^k, frozen while V ↔ h iterate).
+pub fn solve_density_and_h_weighted<const D: usize>(sys: &mut System<D>, weights: Option<&[f64]>) {
     let mut rounds = 0;
     let mut iters = 0u64;
     let mut rebuilds = 0;
@@ -39,7 +47,7 @@ pub fn solve_density_and_h<const D: usize>(sys: &mut System<D>) {
             (0..s.particles.len())
                 .into_par_iter()
                 .with_min_len(64)
-                .map(|a| solve_one(s, a, h_allowed[a]))
+                .map(|a| solve_one(s, weights.unwrap_or(&s.particles.mass), a, h_allowed[a]))
                 .collect()
         };
         sys.stats.seconds_density += t0.elapsed().as_secs_f64();
@@ -72,57 +80,60 @@ pub fn solve_density_and_h<const D: usize>(sys: &mut System<D>) {
     sys.compact_neighbours();
 }
 
-/// ρ(h), dρ/dh and Σ m ∂W/∂h at smoothing length h over a's listed neighbours (+ self).
+/// κ(h) = Σ X_b W_ab(h) and ∂κ/∂h over a's listed neighbours (+ self).
 #[inline]
-fn density_at<const D: usize>(sys: &System<D>, a: usize, h: f64) -> (f64, f64) {
+fn kappa_at<const D: usize>(sys: &System<D>, x: &[f64], a: usize, h: f64) -> (f64, f64) {
     let p = &sys.particles;
     let k = &sys.kernel;
-    let mut rho = p.mass[a] * k.w0(h);
-    let mut drho_dh = p.mass[a] * k.dwdh0(h);
+    let mut kappa = x[a] * k.w0(h);
+    let mut dkappa_dh = x[a] * k.dwdh0(h);
     let xa = p.pos[a];
     for &e in sys.verlet.list.of(a) {
         let (b, code) = unpack(e);
         let r = sys.domain.separation(&xa, &p.pos[b], code).norm();
         let ev = k.eval(r, h);
-        rho += p.mass[b] * ev.w;
-        drho_dh += p.mass[b] * ev.dwdh;
+        kappa += x[b] * ev.w;
+        dkappa_dh += x[b] * ev.dwdh;
     }
-    (rho, drho_dh)
+    (kappa, dkappa_dh)
 }
 
 /// Solve particle a's h; `h_reach` is the largest h its listed neighbours serve exactly.
-fn solve_one<const D: usize>(sys: &System<D>, a: usize, h_reach: f64) -> HSolve {
-    let m = sys.particles.mass[a];
+/// Unknown: h with κ(h) = X_a η^D / h^D (i.e. h = η V^{1/D}); then ρ = m_a κ / X_a.
+fn solve_one<const D: usize>(sys: &System<D>, x: &[f64], a: usize, h_reach: f64) -> HSolve {
+    let xa = x[a];
+    let to_rho = sys.particles.mass[a] / xa;
     let eta_d = sys.eta.powi(D as i32);
     let h_cap = h_reach.min(sys.h_max);
     let mut h = sys.particles.h[a].min(h_cap);
     let mut it = 0;
     let mut lo = 0.0_f64;
     let mut hi = f64::INFINITY;
+    let finish =
+        |h: f64, kappa: f64, dkappa: f64, it: usize, needs_rebuild: bool, capped: bool| HSolve {
+            h,
+            rho: kappa * to_rho,
+            omega: 1.0 + h / (D as f64 * kappa) * dkappa,
+            iterations: it as u32,
+            needs_rebuild,
+            capped,
+        };
     loop {
         it += 1;
-        let (rho, drho_dh) = density_at(sys, a, h);
-        let rho_h = m * eta_d / h.powi(D as i32);
-        let f = rho - rho_h;
+        let (kappa, dkappa) = kappa_at(sys, x, a, h);
+        let kappa_h = xa * eta_d / h.powi(D as i32);
+        let f = kappa - kappa_h;
         // Converged: the summation density and the h-implied density agree.
-        if (f / rho).abs() < DENSITY_TOLERANCE || it >= MAX_NEWTON {
-            let omega = 1.0 + h / (D as f64 * rho) * drho_dh;
-            return HSolve {
-                h,
-                rho,
-                omega,
-                iterations: it as u32,
-                needs_rebuild: false,
-                capped: false,
-            };
+        if (f / kappa).abs() < DENSITY_TOLERANCE || it >= MAX_NEWTON {
+            return finish(h, kappa, dkappa, it, false, false);
         }
-        // f is increasing in h where the solution is unique (ρ_h falls as h^-D); bracket it.
+        // f is increasing in h where the solution is unique (κ_h falls as h^-D); bracket it.
         if f < 0.0 {
             lo = lo.max(h);
         } else {
             hi = hi.min(h);
         }
-        let df = drho_dh + D as f64 * rho_h / h;
+        let df = dkappa + D as f64 * kappa_h / h;
         let mut h_new = if df > 0.0 { h - f / df } else { f64::NAN };
         if !(h_new.is_finite() && h_new > lo && h_new < hi) || h_new > 1.5 * h || h_new < 0.6 * h {
             // Newton left the bracket or stepped too far: bisect (geometric when unbounded).
@@ -136,17 +147,9 @@ fn solve_one<const D: usize>(sys: &System<D>, a: usize, h_reach: f64) -> HSolve 
             }
         }
         if h_new > h_cap {
-            let (rho, drho_dh) = density_at(sys, a, h_cap);
-            let omega = 1.0 + h_cap / (D as f64 * rho) * drho_dh;
+            let (kappa, dkappa) = kappa_at(sys, x, a, h_cap);
             let capped = h_cap >= sys.h_max;
-            return HSolve {
-                h: h_cap,
-                rho,
-                omega,
-                iterations: it as u32,
-                needs_rebuild: !capped,
-                capped,
-            };
+            return finish(h_cap, kappa, dkappa, it, !capped, capped);
         }
         h = h_new;
     }
