@@ -87,6 +87,7 @@ pub struct RunSummary {
     pub phase_seconds: [f64; 4],
     /// Mean density evaluations per particle per h solve, and master-list builds.
     pub mean_h_iterations: f64,
+    pub list_build_seconds: f64,
     pub neighbour_list_builds: u64,
 }
 
@@ -238,6 +239,7 @@ fn run_dim<const D: usize>(
                 st.seconds_forces,
             ]
         },
+        list_build_seconds: sim.sys.stats.seconds_list_builds,
         mean_h_iterations: sim.sys.stats.h_iterations_total / sim.sys.stats.h_solves.max(1) as f64,
         neighbour_list_builds: sim.sys.verlet.builds,
     };

@@ -28,6 +28,9 @@ pub struct EvalStats {
     /// Wall-clock seconds spent per phase since the counters were last reset
     /// (neighbour lists, h/density solve, gradients, forces).
     pub seconds_neighbours: f64,
+    /// Part of `seconds_neighbours` spent building master lists (the rest: validity checks
+    /// and cutting the working list).
+    pub seconds_list_builds: f64,
     pub seconds_density: f64,
     pub seconds_gradients: f64,
     pub seconds_forces: f64,
@@ -115,6 +118,7 @@ impl<const D: usize> System<D> {
                 .any(|i| k.radius(h[i]) + 2.0 * delta > v.reach[i]);
         }
         if rebuild {
+            let tb = std::time::Instant::now();
             let p = &self.particles;
             v.reach =
                 p.h.iter()
@@ -125,6 +129,7 @@ impl<const D: usize> System<D> {
             v.pos.clone_from(&p.pos);
             v.builds += 1;
             delta = 0.0;
+            self.stats.seconds_list_builds += tb.elapsed().as_secs_f64();
         }
         self.stats.seconds_neighbours += t0.elapsed().as_secs_f64();
         v.reach
@@ -191,22 +196,35 @@ impl<const D: usize> System<D> {
         F: Fn(usize, &mut T, &Pair<D>) + Sync,
     {
         let p = &self.particles;
+        self.gather_with(|i| (p.pos[i], p.vel[i]), out, f)
+    }
+
+    /// [`Self::gather`] reading positions and velocities through `kin` — for passes that pack
+    /// what they read of a neighbour into one record per particle (one cache line instead of
+    /// one per field array).
+    #[inline]
+    pub fn gather_with<T: Send, K, F>(&self, kin: K, out: &mut [T], f: F)
+    where
+        K: Fn(usize) -> (Vector<D>, Vector<D>) + Sync,
+        F: Fn(usize, &mut T, &Pair<D>) + Sync,
+    {
         let dom = &self.domain;
         let nb = &self.neighbours;
         out.par_iter_mut()
             .enumerate()
             .with_min_len(64)
             .for_each(|(a, acc)| {
-                let xa = p.pos[a];
+                let (xa, _) = kin(a);
                 for &e in nb.of(a) {
                     let (b, code) = unpack(e);
-                    let dx = dom.separation(&xa, &p.pos[b], code);
+                    let (xb, vb) = kin(b);
+                    let dx = dom.separation(&xa, &xb, code);
                     let pair = Pair {
                         b,
                         code,
                         dx,
                         r: dx.norm(),
-                        vb: dom.image_velocity(&p.vel[b], code),
+                        vb: dom.image_velocity(&vb, code),
                     };
                     f(a, acc, &pair);
                 }

@@ -186,8 +186,8 @@ fn main() -> ExitCode {
                     );
                     let ph = s.phase_seconds;
                     println!(
-                        "time per phase: neighbours {:.2} s ({} list builds), density/h {:.2} s ({:.2} iterations), gradients {:.2} s, forces {:.2} s",
-                        ph[0], s.neighbour_list_builds, ph[1], s.mean_h_iterations, ph[2], ph[3]
+                        "time per phase: neighbours {:.2} s ({} list builds: {:.2} s), density/h {:.2} s ({:.2} iterations), gradients {:.2} s, forces {:.2} s",
+                        ph[0], s.neighbour_list_builds, s.list_build_seconds, ph[1], s.mean_h_iterations, ph[2], ph[3]
                     );
                     let (e0, e1) = (s.initial.total_energy, s.last.total_energy);
                     println!(

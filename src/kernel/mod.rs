@@ -230,6 +230,21 @@ impl<const D: usize> DimKernel<D> {
         self.sigma * Self::hinv_pow(h) * hinv * self.kernel.shape(q).1
     }
 
+    /// ∂W/∂r with a precomputed 1/h (no division in the pair loop).
+    #[inline(always)]
+    pub fn dwdr_hinv(&self, r: f64, hinv: f64) -> f64 {
+        let q = r * hinv;
+        if q >= SUPPORT {
+            return 0.0;
+        }
+        let hd = match D {
+            1 => hinv,
+            2 => hinv * hinv,
+            _ => hinv * hinv * hinv,
+        };
+        self.sigma * hd * hinv * self.kernel.shape(q).1
+    }
+
     /// W(0, h): the self-contribution.
     #[inline(always)]
     pub fn w0(&self, h: f64) -> f64 {

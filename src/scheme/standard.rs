@@ -100,6 +100,24 @@ impl<const D: usize> Default for GradAcc<D> {
     }
 }
 
+/// What the force pass reads of one particle.
+#[derive(Clone, Copy)]
+struct ForceRecord<const D: usize> {
+    x: Vector<D>,
+    v: Vector<D>,
+    m: f64,
+    h: f64,
+    hinv: f64,
+    /// P/(Ω ρ²)
+    pstd: f64,
+    p: f64,
+    rho: f64,
+    c: f64,
+    alpha: f64,
+    bal: f64,
+    u: f64,
+}
+
 #[derive(Clone, Copy)]
 struct ForceAcc<const D: usize> {
     acc: Vector<D>,
@@ -224,19 +242,11 @@ pub(crate) fn force_pass<const D: usize>(
     let n = sys.particles.len();
     let mut out = vec![ForceAcc::<D>::default(); n];
     let p = &sys.particles;
-    // Per-particle factors computed once rather than per pair: P/(Ω ρ²) for the standard
-    // form, P/ρ² for rpSPH's energy equation.
+    // P/(Ω ρ²) per particle, computed once rather than per pair.
     let pterm_std: Vec<f64> = (0..n)
         .into_par_iter()
         .map(|a| p.pressure[a] / (p.omega[a] * p.rho[a] * p.rho[a]))
         .collect();
-    let pterm_rel: Vec<f64> = match form {
-        PressureForm::GradH => Vec::new(),
-        PressureForm::Relative { .. } => (0..n)
-            .into_par_iter()
-            .map(|a| p.pressure[a] / (p.rho[a] * p.rho[a]))
-            .collect(),
-    };
     // Which particles use the standard form (all for GradH; with rpSPH's shock switch those
     // with −h ∇·v > 3c).
     let standard_here: Vec<bool> = match form {
@@ -246,61 +256,82 @@ pub(crate) fn force_pass<const D: usize>(
             .map(|a| shock_switch && -p.h[a] * p.div_v[a] > 3.0 * p.sound_speed[a])
             .collect(),
     };
-    {
-        let p = &sys.particles;
-        let k = &sys.kernel;
+    // Everything the pair term reads of a particle, packed (see System::gather_with).
+    let recs: Vec<ForceRecord<D>> = {
         let bal = &p.extra_scalars[balsara_slot];
-        sys.gather(&mut out, |a, o, pr| {
-            let b = pr.b;
-            if pr.r <= 0.0 {
-                return;
-            }
-            let rinv = 1.0 / pr.r;
-            let rhat = pr.dx * rinv;
-            // ∇_a W_ab(h) = dW/dr · r̂_ab
-            let fa = k.dwdr(pr.r, p.h[a]);
-            let fb = k.dwdr(pr.r, p.h[b]);
-            let mb = p.mass[b];
-            let vab = p.vel[a] - pr.vb;
-            let w = vab.dot(&rhat);
-            let fbar = 0.5 * (fa + fb);
-            // pressure force along r̂ (times −m_b below) and pressure work
-            let (mut force, mut dudt) = if standard_here[a] {
-                let (pa, pb) = (pterm_std[a], pterm_std[b]);
-                (pa * fa + pb * fb, pa * mb * w * fa)
-            } else {
-                let symmetric = matches!(
-                    form,
-                    PressureForm::Relative {
-                        symmetric: true,
-                        ..
-                    }
-                );
-                let g = if symmetric { fbar } else { fa };
-                let rel = (p.pressure[b] - p.pressure[a]) / (p.rho[b] * p.rho[b]);
-                (rel * g, pterm_rel[b] * mb * w * fa)
-            };
-            let ca = p.sound_speed[a];
-            let cb = p.sound_speed[b];
-            let vsig = ca + cb - 3.0 * w.min(0.0);
-            o.vsig = o.vsig.max(vsig);
-            let rho_bar = 0.5 * (p.rho[a] + p.rho[b]);
-            if w < 0.0 {
-                let hbar = 0.5 * (p.h[a] + p.h[b]);
-                let mu = hbar * w * pr.r / (pr.r * pr.r + prm.epsilon * hbar * hbar);
-                let alpha = 0.5 * (p.alpha[a] + p.alpha[b]);
-                let fbal = 0.5 * (bal[a] + bal[b]);
-                let pi = fbal * (-alpha * 0.5 * (ca + cb) * mu + prm.beta * mu * mu) / rho_bar;
-                force += pi * fbar;
-                dudt += 0.5 * mb * pi * w * fbar;
-            }
-            if prm.conductivity > 0.0 {
-                let vsig_u = ((p.pressure[a] - p.pressure[b]).abs() / rho_bar).sqrt();
-                dudt += mb * prm.conductivity * vsig_u * (p.u[a] - p.u[b]) * fbar / rho_bar;
-            }
-            o.acc -= (mb * force) * rhat;
-            o.dudt += dudt;
-        });
+        (0..n)
+            .into_par_iter()
+            .map(|a| ForceRecord {
+                x: p.pos[a],
+                v: p.vel[a],
+                m: p.mass[a],
+                h: p.h[a],
+                hinv: 1.0 / p.h[a],
+                pstd: pterm_std[a],
+                p: p.pressure[a],
+                rho: p.rho[a],
+                c: p.sound_speed[a],
+                alpha: p.alpha[a],
+                bal: bal[a],
+                u: p.u[a],
+            })
+            .collect()
+    };
+    let symmetric = matches!(
+        form,
+        PressureForm::Relative {
+            symmetric: true,
+            ..
+        }
+    );
+    {
+        let k = &sys.kernel;
+        sys.gather_with(
+            |i| (recs[i].x, recs[i].v),
+            &mut out,
+            |a, o, pr| {
+                if pr.r <= 0.0 {
+                    return;
+                }
+                let (ra, rb) = (&recs[a], &recs[pr.b]);
+                let rinv = 1.0 / pr.r;
+                let rhat = pr.dx * rinv;
+                // ∇_a W_ab(h) = dW/dr · r̂_ab
+                let fa = k.dwdr_hinv(pr.r, ra.hinv);
+                let fb = k.dwdr_hinv(pr.r, rb.hinv);
+                let mb = rb.m;
+                let vab = ra.v - pr.vb;
+                let w = vab.dot(&rhat);
+                let fbar = 0.5 * (fa + fb);
+                // pressure force along r̂ (times −m_b below) and pressure work
+                let (mut force, mut dudt) = if standard_here[a] {
+                    (ra.pstd * fa + rb.pstd * fb, ra.pstd * mb * w * fa)
+                } else {
+                    let g = if symmetric { fbar } else { fa };
+                    let rho2 = rb.rho * rb.rho;
+                    ((rb.p - ra.p) / rho2 * g, rb.p / rho2 * mb * w * fa)
+                };
+                let vsig = ra.c + rb.c - 3.0 * w.min(0.0);
+                o.vsig = o.vsig.max(vsig);
+                let rho_bar = 0.5 * (ra.rho + rb.rho);
+                if w < 0.0 {
+                    let hbar = 0.5 * (ra.h + rb.h);
+                    let mu = hbar * w * pr.r / (pr.r * pr.r + prm.epsilon * hbar * hbar);
+                    let alpha = 0.5 * (ra.alpha + rb.alpha);
+                    let fbal = 0.5 * (ra.bal + rb.bal);
+                    let pi =
+                        fbal * (-alpha * 0.5 * (ra.c + rb.c) * mu + prm.beta * mu * mu) / rho_bar;
+                    force += pi * fbar;
+                    dudt += 0.5 * mb * pi * w * fbar;
+                }
+                if prm.conductivity > 0.0 {
+                    let vsig_u = ((ra.p - rb.p).abs() / rho_bar).sqrt();
+                    dudt += mb * prm.conductivity * vsig_u * (ra.u - rb.u) * fbar / rho_bar;
+                }
+                o.acc -= (mb * force) * rhat;
+                o.dudt += dudt;
+            },
+        );
     }
     sys.stats.seconds_forces += t0.elapsed().as_secs_f64();
     sys.stats.force_pairs = sys.neighbours.total_pairs() as u64;
