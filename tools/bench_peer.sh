@@ -2,11 +2,19 @@
 # Side-by-side benchmark against PySPH on the 2D Noh problem (100^2 particles, gamma = 5/3,
 # t = 0.6), both codes in this one run on this machine. Installs PySPH 1.0b2 from PyPI into
 # target/peer-venv the first time (about 3.5 minutes; see ../shared/spec/peers.md §1.1).
-# Usage: tools/bench_peer.sh [--threads N]   (default: all cores for both codes)
+# Usage: tools/bench_peer.sh [--threads N] [--schemes psph,crksph]
+#   (default: all cores for both codes; PySPH's psph and crksph schemes — crksph takes ~7 min)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 THREADS=$(nproc)
-if [[ "${1:-}" == "--threads" ]]; then THREADS=$2; fi
+SCHEMES=psph,crksph
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --threads) THREADS=$2; shift 2 ;;
+    --schemes) SCHEMES=$2; shift 2 ;;
+    *) echo "bench_peer.sh: unknown argument $1 (allowed: --threads N, --schemes LIST)" >&2; exit 2 ;;
+  esac
+done
 VENV=target/peer-venv
 if [[ ! -f $VENV/.installed ]]; then
   python3 -m venv $VENV
@@ -17,4 +25,4 @@ if [[ ! -f $VENV/.installed ]]; then
   touch $VENV/.installed
 fi
 cargo build --release --quiet
-exec $VENV/bin/python tools/bench_peer.py --threads "$THREADS"
+exec $VENV/bin/python tools/bench_peer.py --threads "$THREADS" --schemes "$SCHEMES"

@@ -99,10 +99,11 @@ pub struct DomainConfig {
     pub boundary: Vec<BoundaryKind>,
 }
 
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct KernelConfig {
-    pub name: KernelName,
+    /// Default: the scheme's kernel (cubic spline; Wendland C6 for Rosswog F1–F3).
+    pub name: Option<KernelName>,
     /// h = η (m/ρ)^{1/D}; default: the kernel's recommended η.
     pub eta: Option<f64>,
     /// Exponent of the sinc family (3..9).
@@ -111,25 +112,14 @@ pub struct KernelConfig {
     pub h_max: Option<f64>,
 }
 
-impl Default for KernelConfig {
-    fn default() -> Self {
-        Self {
-            name: KernelName::CubicSpline,
-            eta: None,
-            sinc_n: None,
-            h_max: None,
-        }
-    }
-}
-
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TimeConfig {
     pub t_end: f64,
-    #[serde(default = "default_integrator")]
-    pub integrator: IntegratorKind,
-    #[serde(default = "default_cfl")]
-    pub cfl: f64,
+    /// Default: the scheme's integrator (leapfrog; SSP-RK3 for Rosswog presets).
+    pub integrator: Option<IntegratorKind>,
+    /// Default: the scheme's Courant factor (0.3; 0.5 for Rosswog presets).
+    pub cfl: Option<f64>,
     #[serde(default = "default_cfl_accel")]
     pub cfl_accel: f64,
     #[serde(default = "default_dt_min")]
@@ -139,12 +129,6 @@ pub struct TimeConfig {
     pub max_steps: u64,
 }
 
-fn default_integrator() -> IntegratorKind {
-    IntegratorKind::Leapfrog
-}
-fn default_cfl() -> f64 {
-    StepControl::default().cfl
-}
 fn default_cfl_accel() -> f64 {
     StepControl::default().cfl_accel
 }
@@ -313,18 +297,41 @@ impl Case {
         Ok(())
     }
 
+    fn kernel_name(&self) -> KernelName {
+        self.kernel.name.unwrap_or(self.scheme.preferred_kernel().0)
+    }
+
     fn kernel(&self) -> Result<AnyKernel, CaseError> {
         let n = self.kernel.sinc_n.unwrap_or(5);
-        if self.kernel.sinc_n.is_some() && self.kernel.name != KernelName::Sinc {
+        if self.kernel.sinc_n.is_some() && self.kernel_name() != KernelName::Sinc {
             return Err(CaseError(
                 "kernel.sinc_n: only allowed with kernel.name = \"sinc\"".into(),
             ));
         }
-        Ok(AnyKernel::from_name(self.kernel.name, n)?)
+        Ok(AnyKernel::from_name(self.kernel_name(), n)?)
     }
 
+    /// η: as given, else the scheme's (when the scheme also chose the kernel), else the kernel's.
     pub fn eta(&self) -> Result<f64, CaseError> {
-        Ok(self.kernel.eta.unwrap_or(self.kernel()?.default_eta()))
+        if let Some(e) = self.kernel.eta {
+            return Ok(e);
+        }
+        match (self.kernel.name, self.scheme.preferred_kernel().1) {
+            (None, Some(e)) => Ok(e),
+            _ => Ok(self.kernel()?.default_eta()),
+        }
+    }
+
+    pub fn integrator(&self) -> IntegratorKind {
+        self.time
+            .integrator
+            .unwrap_or(self.scheme.preferred_integrator().0)
+    }
+
+    pub fn cfl(&self) -> f64 {
+        self.time
+            .cfl
+            .unwrap_or(self.scheme.preferred_integrator().1)
     }
 
     /// Range checks of every field.
@@ -377,10 +384,11 @@ impl Case {
             }
         };
         pos("time.t_end", t.t_end)?;
-        if !(t.cfl > 0.0 && t.cfl <= 1.0) {
+        let cfl = self.cfl();
+        if !(cfl > 0.0 && cfl <= 1.0) {
             return Err(CaseError(format!(
                 "time.cfl: must be in (0, 1], got {}",
-                t.cfl
+                cfl
             )));
         }
         if !(t.cfl_accel > 0.0 && t.cfl_accel <= 1.0) {
@@ -588,7 +596,7 @@ impl Case {
 
     pub fn step_control(&self) -> StepControl {
         StepControl {
-            cfl: self.time.cfl,
+            cfl: self.cfl(),
             cfl_accel: self.time.cfl_accel,
             dt_min: self.time.dt_min,
             dt_max: self.time.dt_max.unwrap_or(f64::INFINITY),
@@ -660,7 +668,7 @@ impl Case {
         Simulation::new(
             sys,
             self.scheme.build::<D>(),
-            self.time.integrator,
+            self.integrator(),
             self.step_control(),
         )
         .map_err(|e: SolverError| CaseError(format!("initial state: {e}")))

@@ -15,10 +15,12 @@
 //! gives η = 2: 4 radial neighbours, as the paper's comparisons fix).
 
 mod bspline;
+mod peaked;
 mod sinc;
 mod wendland;
 
 pub use bspline::{CubicSplineM4, QuarticSplineM5, QuinticSplineM6, SepticSplineW7};
+pub use peaked::{LinearQuartic, QuarticCoreM6};
 pub use sinc::SincKernel;
 pub use wendland::{WendlandC2, WendlandC4, WendlandC6};
 
@@ -62,10 +64,14 @@ pub enum KernelName {
     WendlandC6,
     /// Sinc family W_H,n; the exponent comes from `kernel.sinc_n`.
     Sinc,
+    /// Peaked linear-quartic kernel (Valcke et al. 2010), for comparison only.
+    Liq,
+    /// M6 with a quartic core and non-zero central slope, for comparison only.
+    Qcm6,
 }
 
 pub const KERNEL_NAMES: &str =
-    "cubic-spline, quartic-spline, quintic-spline, septic-spline, wendland-c2, wendland-c4, wendland-c6, sinc";
+    "cubic-spline, quartic-spline, quintic-spline, septic-spline, wendland-c2, wendland-c4, wendland-c6, sinc, liq, qcm6";
 
 /// Runtime-chosen kernel. An enum rather than a trait object: the match is perfectly
 /// predicted inside a pair loop and lets the compiler inline each shape.
@@ -79,6 +85,8 @@ pub enum AnyKernel {
     C4(WendlandC4),
     C6(WendlandC6),
     Sinc(SincKernel),
+    Liq(LinearQuartic),
+    Qcm6(QuarticCoreM6),
 }
 
 impl AnyKernel {
@@ -93,6 +101,8 @@ impl AnyKernel {
             KernelName::WendlandC4 => AnyKernel::C4(WendlandC4),
             KernelName::WendlandC6 => AnyKernel::C6(WendlandC6),
             KernelName::Sinc => AnyKernel::Sinc(SincKernel::new(sinc_n)?),
+            KernelName::Liq => AnyKernel::Liq(LinearQuartic),
+            KernelName::Qcm6 => AnyKernel::Qcm6(QuarticCoreM6),
         })
     }
 
@@ -115,6 +125,8 @@ impl AnyKernel {
         for n in 3..=9 {
             v.push(AnyKernel::Sinc(SincKernel::new(n).expect("3..=9 is valid")));
         }
+        v.push(AnyKernel::Liq(LinearQuartic));
+        v.push(AnyKernel::Qcm6(QuarticCoreM6));
         v
     }
 }
@@ -130,6 +142,8 @@ macro_rules! dispatch {
             AnyKernel::C4($k) => $e,
             AnyKernel::C6($k) => $e,
             AnyKernel::Sinc($k) => $e,
+            AnyKernel::Liq($k) => $e,
+            AnyKernel::Qcm6($k) => $e,
         }
     };
 }

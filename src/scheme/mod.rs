@@ -2,6 +2,7 @@
 //! driver and the integrators never know which scheme runs. Each formulation lives in its own
 //! module behind [`Scheme`]; all of them loop over pairs through [`System::gather`].
 
+pub mod rosswog;
 pub mod rpsph;
 pub mod smoothing;
 pub mod standard;
@@ -39,22 +40,71 @@ pub enum SchemeConfig {
     Standard(standard::StandardParams),
     /// Relative-pressure SPH (Abel 2011), see [`rpsph`].
     Rpsph(rpsph::RpsphParams),
+    /// Rosswog (2015) formulations, see [`rosswog`]: the spec table's presets; any key
+    /// given overrides the preset.
+    #[serde(rename = "rosswog-f1")]
+    RosswogF1(rosswog::RosswogOverrides),
+    #[serde(rename = "rosswog-f2")]
+    RosswogF2(rosswog::RosswogOverrides),
+    #[serde(rename = "rosswog-f3")]
+    RosswogF3(rosswog::RosswogOverrides),
+    #[serde(rename = "rosswog-f4")]
+    RosswogF4(rosswog::RosswogOverrides),
 }
 
 /// Scheme names accepted in `scheme.name`.
-pub const SCHEME_NAMES: &str = "standard, rpsph";
+pub const SCHEME_NAMES: &str = "standard, rpsph, rosswog-f1, rosswog-f2, rosswog-f3, rosswog-f4";
 
 impl SchemeConfig {
     pub fn validate(&self) -> Result<(), String> {
         match self {
             SchemeConfig::Standard(p) => p.validate(),
             SchemeConfig::Rpsph(p) => p.validate(),
+            _ => {
+                let (preset, o) = self.rosswog().expect("rosswog variant");
+                o.validate(preset)
+            }
         }
     }
     pub fn build<const D: usize>(&self) -> Box<dyn Scheme<D>> {
         match *self {
             SchemeConfig::Standard(p) => Box::new(standard::StandardSph::new(p)),
             SchemeConfig::Rpsph(p) => Box::new(rpsph::Rpsph::new(p)),
+            _ => {
+                let (preset, o) = self.rosswog().expect("rosswog variant");
+                Box::new(rosswog::Rosswog::new(preset, o.resolve(preset)))
+            }
+        }
+    }
+
+    fn rosswog(&self) -> Option<(rosswog::Preset, rosswog::RosswogOverrides)> {
+        use rosswog::Preset;
+        match *self {
+            SchemeConfig::RosswogF1(o) => Some((Preset::F1, o)),
+            SchemeConfig::RosswogF2(o) => Some((Preset::F2, o)),
+            SchemeConfig::RosswogF3(o) => Some((Preset::F3, o)),
+            SchemeConfig::RosswogF4(o) => Some((Preset::F4, o)),
+            _ => None,
+        }
+    }
+
+    /// Kernel and η a scheme runs with when the case has no `[kernel]` table.
+    pub fn preferred_kernel(&self) -> (crate::kernel::KernelName, Option<f64>) {
+        match self.rosswog() {
+            Some((preset, _)) => {
+                let (k, eta) = preset.kernel();
+                (k, Some(eta))
+            }
+            None => (crate::kernel::KernelName::CubicSpline, None),
+        }
+    }
+
+    /// Integrator and Courant factor a scheme runs with when `[time]` does not say.
+    pub fn preferred_integrator(&self) -> (crate::integrate::IntegratorKind, f64) {
+        match self.rosswog() {
+            // Rosswog spec §7.3: SSP-RK3 with C = 0.5.
+            Some(_) => (crate::integrate::IntegratorKind::SspRk3, 0.5),
+            None => (crate::integrate::IntegratorKind::Leapfrog, 0.3),
         }
     }
 }

@@ -136,7 +136,7 @@ impl<const D: usize> Default for ForceAcc<D> {
 }
 
 /// |∇×v| from the velocity-gradient tensor (2D: |∂v_y/∂x − ∂v_x/∂y|; 1D: 0).
-fn curl_norm<const D: usize>(g: &nalgebra::SMatrix<f64, D, D>) -> f64 {
+pub(crate) fn curl_norm<const D: usize>(g: &nalgebra::SMatrix<f64, D, D>) -> f64 {
     match D {
         2 => (g[(1, 0)] - g[(0, 1)]).abs(),
         3 => {

@@ -1,0 +1,412 @@
+//! Rosswog (2015), "Boosting the accuracy of SPH" — the Newtonian formulations F1–F4
+//! (spec `rosswog.md` §6–7). Four ingredients, each switchable:
+//!
+//! * gradient: kernel gradients with grad-h terms (Eqs. 55/61) or the antisymmetric
+//!   integral approximation G_a = C_a (r_b − r_a) W_ab(h_a) (Eqs. 64/65, 66/67), Ω ≡ 1;
+//! * volume element X = 1, m or P^k (Eqs. 36–41) with the ρ–P–h iteration of §7.2;
+//! * dissipation (§6.4, Newtonian limit of Chow & Monaghan) on momentum and energy with the
+//!   gradient factor D_ab = ½(g_a + g_b) of the same family as the hydro terms (Eq. 72/76);
+//! * the per-particle dissipation parameter K: constant, or the shock and noise triggers of
+//!   §7.1 ([`triggers`]).
+//!
+//! The specific internal energy is evolved with du/dt = de/dt − v·dv/dt (spec §6.3), so
+//! total energy is conserved in continuous time and pairwise antisymmetry keeps momentum
+//! exact. Angular momentum is not exact with IA (G_a is not along r_ab; spec §3.4).
+
+pub mod gradients;
+pub mod triggers;
+
+use super::smoothing::solve_density_and_h_weighted;
+use super::standard::check_range;
+use super::{Scheme, SchemeError};
+use crate::kernel::KernelName;
+use crate::particles::Vector;
+use crate::system::System;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Volume weight X of V_a = X_a / Σ_b X_b W_ab(h_a).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum VolumeElement {
+    /// X = 1 (number density).
+    One,
+    /// X = m (standard SPH).
+    Mass,
+    /// X = P^k.
+    Pressure,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum GradientOperator {
+    /// Kernel gradients with grad-h factors.
+    Kernel,
+    /// Antisymmetric integral approximation (IA).
+    IntegralApproximation,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SignalVelocity {
+    /// max(c_a, c_b) + max(0, −v_ab·ê): Galilean invariant (spec §6.5 [MINE]).
+    Galilean,
+    /// max(c_a + |v_a·ê|, c_b + |v_b·ê|): the literal Newtonian limit of Eq. 79.
+    Literal,
+}
+
+/// Fully resolved parameters of one formulation.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RosswogParams {
+    pub volume: VolumeElement,
+    /// Exponent k of X = P^k.
+    pub k: f64,
+    pub gradient: GradientOperator,
+    /// Triggered dissipation (true) or constant K = `k_constant`.
+    pub triggers: bool,
+    pub k_constant: f64,
+    pub k_max: f64,
+    pub n_noise: f64,
+    /// Decay time τ = χ h / c_s.
+    pub chi: f64,
+    /// Floor of K (Eq. 82), 0 by default.
+    pub k_min: f64,
+    pub signal_velocity: SignalVelocity,
+}
+
+/// The four presets of the spec's table (§0).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Preset {
+    F1,
+    F2,
+    F3,
+    F4,
+}
+
+impl Preset {
+    pub fn params(self) -> RosswogParams {
+        let base = RosswogParams {
+            volume: VolumeElement::Pressure,
+            k: 0.05,
+            gradient: GradientOperator::IntegralApproximation,
+            triggers: true,
+            k_constant: 1.0,
+            k_max: 1.5,
+            n_noise: 50.0,
+            chi: 2.0,
+            k_min: 0.0,
+            signal_velocity: SignalVelocity::Galilean,
+        };
+        match self {
+            Preset::F1 => base,
+            Preset::F2 => RosswogParams {
+                gradient: GradientOperator::Kernel,
+                ..base
+            },
+            Preset::F3 => RosswogParams {
+                volume: VolumeElement::Mass,
+                ..base
+            },
+            Preset::F4 => RosswogParams {
+                volume: VolumeElement::Mass,
+                gradient: GradientOperator::Kernel,
+                triggers: false,
+                ..base
+            },
+        }
+    }
+
+    /// Kernel and η of the table: W3,3 (Wendland C6 at 2h) η = 2.2 for F1–F3, M4 η = 1.2 for F4.
+    pub fn kernel(self) -> (KernelName, f64) {
+        match self {
+            Preset::F4 => (KernelName::CubicSpline, 1.2),
+            _ => (KernelName::WendlandC6, 2.2),
+        }
+    }
+}
+
+/// `[scheme]` keys of a preset; any key given overrides the preset's value.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RosswogOverrides {
+    pub volume: Option<VolumeElement>,
+    pub k: Option<f64>,
+    pub gradient: Option<GradientOperator>,
+    pub triggers: Option<bool>,
+    pub k_constant: Option<f64>,
+    pub k_max: Option<f64>,
+    pub n_noise: Option<f64>,
+    pub chi: Option<f64>,
+    pub k_min: Option<f64>,
+    pub signal_velocity: Option<SignalVelocity>,
+}
+
+impl RosswogOverrides {
+    pub fn resolve(&self, preset: Preset) -> RosswogParams {
+        let b = preset.params();
+        RosswogParams {
+            volume: self.volume.unwrap_or(b.volume),
+            k: self.k.unwrap_or(b.k),
+            gradient: self.gradient.unwrap_or(b.gradient),
+            triggers: self.triggers.unwrap_or(b.triggers),
+            k_constant: self.k_constant.unwrap_or(b.k_constant),
+            k_max: self.k_max.unwrap_or(b.k_max),
+            n_noise: self.n_noise.unwrap_or(b.n_noise),
+            chi: self.chi.unwrap_or(b.chi),
+            k_min: self.k_min.unwrap_or(b.k_min),
+            signal_velocity: self.signal_velocity.unwrap_or(b.signal_velocity),
+        }
+    }
+
+    pub fn validate(&self, preset: Preset) -> Result<(), String> {
+        let p = self.resolve(preset);
+        check_range("scheme.k", p.k, 0.0, 1.0)?;
+        check_range("scheme.k_constant", p.k_constant, 0.0, 10.0)?;
+        check_range("scheme.k_max", p.k_max, 0.0, 10.0)?;
+        if !(p.n_noise.is_finite() && p.n_noise > 0.0) {
+            return Err(format!(
+                "scheme.n_noise: must be a finite number > 0, got {}",
+                p.n_noise
+            ));
+        }
+        if !(p.chi.is_finite() && p.chi > 0.0) {
+            return Err(format!(
+                "scheme.chi: must be a finite number > 0, got {}",
+                p.chi
+            ));
+        }
+        check_range("scheme.k_min", p.k_min, 0.0, p.k_max)?;
+        Ok(())
+    }
+}
+
+pub struct Rosswog {
+    pub params: RosswogParams,
+    preset: Preset,
+    /// Slot holding ∇·v of the previous full step (shock trigger).
+    prev_div_slot: usize,
+    /// Particles whose τ was near-singular in the latest evaluation.
+    pub ia_fallbacks: u64,
+    first_step: bool,
+}
+
+impl Rosswog {
+    pub fn new(preset: Preset, params: RosswogParams) -> Self {
+        Self {
+            params,
+            preset,
+            prev_div_slot: usize::MAX,
+            ia_fallbacks: 0,
+            first_step: true,
+        }
+    }
+
+    /// X for the current pressures (X = P^k with P floored at a tiny positive value).
+    fn weights<const D: usize>(&self, sys: &System<D>) -> Option<Vec<f64>> {
+        let p = &sys.particles;
+        match self.params.volume {
+            VolumeElement::Mass => None,
+            VolumeElement::One => Some(vec![1.0; p.len()]),
+            VolumeElement::Pressure => {
+                let k = self.params.k;
+                Some(
+                    p.pressure
+                        .par_iter()
+                        .map(|&pr| pr.max(1e-300).powf(k))
+                        .collect(),
+                )
+            }
+        }
+    }
+
+    /// Density, h and pressure; for X = P^k the ρ–P loop of spec §7.2 (steps a–e).
+    fn density<const D: usize>(&self, sys: &mut System<D>) -> Vec<f64> {
+        let x = self.weights(sys);
+        solve_density_and_h_weighted(sys, x.as_deref());
+        sys.update_eos();
+        if self.params.volume == VolumeElement::Pressure {
+            let x = self.weights(sys).expect("X = P^k");
+            solve_density_and_h_weighted(sys, Some(&x));
+            sys.update_eos();
+            return x;
+        }
+        x.unwrap_or_else(|| sys.particles.mass.clone())
+    }
+}
+
+/// What the pair loop reads of one particle.
+#[derive(Clone, Copy)]
+struct Rec<const D: usize> {
+    x: Vector<D>,
+    v: Vector<D>,
+    m: f64,
+    h: f64,
+    /// X_a
+    xw: f64,
+    /// A_a = P_a V_a² / (Ω_a X_a)
+    a: f64,
+    rho: f64,
+    c: f64,
+    u: f64,
+    k: f64,
+}
+
+#[derive(Clone, Copy)]
+struct Acc<const D: usize> {
+    dv: Vector<D>,
+    du_hydro: f64,
+    dv_diss: Vector<D>,
+    de_diss: f64,
+    vsig: f64,
+}
+
+impl<const D: usize> Default for Acc<D> {
+    fn default() -> Self {
+        Self {
+            dv: Vector::zeros(),
+            du_hydro: 0.0,
+            dv_diss: Vector::zeros(),
+            de_diss: 0.0,
+            vsig: 0.0,
+        }
+    }
+}
+
+impl<const D: usize> Scheme<D> for Rosswog {
+    fn name(&self) -> &'static str {
+        match self.preset {
+            Preset::F1 => "rosswog-f1",
+            Preset::F2 => "rosswog-f2",
+            Preset::F3 => "rosswog-f3",
+            Preset::F4 => "rosswog-f4",
+        }
+    }
+
+    fn init(&mut self, sys: &mut System<D>) {
+        self.prev_div_slot = sys.particles.add_scalar_field(0.0);
+        // Pressures of the initial condition seed X = P^k.
+        sys.update_eos();
+        let k0 = if self.params.triggers {
+            self.params.k_min
+        } else {
+            self.params.k_constant
+        };
+        sys.particles.alpha.iter_mut().for_each(|a| *a = k0);
+    }
+
+    fn evaluate(&mut self, sys: &mut System<D>) -> Result<(), SchemeError> {
+        let xw = self.density(sys);
+        let t0 = std::time::Instant::now();
+        let (mats, _grads, fallbacks) = gradients::ia_pass(sys);
+        self.ia_fallbacks = fallbacks;
+        sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
+        let t0 = std::time::Instant::now();
+        let n = sys.particles.len();
+        let ia = self.params.gradient == GradientOperator::IntegralApproximation;
+        let literal = self.params.signal_velocity == SignalVelocity::Literal;
+        let p = &sys.particles;
+        let recs: Vec<Rec<D>> = (0..n)
+            .into_par_iter()
+            .map(|a| {
+                let v = p.mass[a] / p.rho[a];
+                let om = if ia { 1.0 } else { p.omega[a] };
+                Rec {
+                    x: p.pos[a],
+                    v: p.vel[a],
+                    m: p.mass[a],
+                    h: p.h[a],
+                    xw: xw[a],
+                    a: p.pressure[a] * v * v / (om * xw[a]),
+                    rho: p.rho[a],
+                    c: p.sound_speed[a],
+                    u: p.u[a],
+                    k: p.alpha[a],
+                }
+            })
+            .collect();
+        let mut out = vec![Acc::<D>::default(); n];
+        let k = &sys.kernel;
+        // g_a and g_b of the pair (a, b), both standing in for ∇_a W (Eqs. 66/67): per particle
+        // either IA (C (r_b − r_a) W) or, on fallback / kernel formulations, dW/dr · r̂_ab.
+        let grad = |i: usize, r: &Rec<D>, dx: &Vector<D>, dist: f64, code: u8| -> Vector<D> {
+            if ia && !mats[i].fallback {
+                // A mirror image carries the reflected matrix R C R.
+                let c = if code == 0 {
+                    mats[i].c
+                } else {
+                    gradients::reflect(&mats[i].c, code)
+                };
+                c * (-dx) * k.w(dist, r.h)
+            } else {
+                *dx * (k.dwdr(dist, r.h) / dist)
+            }
+        };
+        sys.gather_with(
+            |i| (recs[i].x, recs[i].v),
+            &mut out,
+            |a, o, pr| {
+                if pr.r <= 0.0 {
+                    return;
+                }
+                let (ra, rb) = (&recs[a], &recs[pr.b]);
+                let ga = grad(a, ra, &pr.dx, pr.r, 0);
+                let gb = grad(pr.b, rb, &pr.dx, pr.r, pr.code);
+                // hydro (Eqs. 55/61 or 64/65), without the 1/m_a factor
+                o.dv -= ga * (ra.a * rb.xw) + gb * (rb.a * ra.xw);
+                let vab = ra.v - pr.vb;
+                o.du_hydro += rb.xw * vab.dot(&ga);
+                let e = pr.dx / pr.r;
+                let w = vab.dot(&e);
+                let vsig = if literal {
+                    (ra.c + ra.v.dot(&e).abs()).max(rb.c + pr.vb.dot(&e).abs())
+                } else {
+                    ra.c.max(rb.c) - w.min(0.0)
+                };
+                o.vsig = o.vsig.max(vsig);
+                if w < 0.0 {
+                    // Newtonian Chow–Monaghan dissipation (spec §6.4) with D_ab = ½(g_a + g_b).
+                    let dab = (ga + gb) * 0.5;
+                    let kab = 0.5 * (ra.k + rb.k);
+                    let rho_bar = 0.5 * (ra.rho + rb.rho);
+                    let pi = -kab * vsig * w / rho_bar;
+                    let va_e = ra.v.dot(&e);
+                    let vb_e = pr.vb.dot(&e);
+                    let estar = (ra.u + 0.5 * va_e * va_e) - (rb.u + 0.5 * vb_e * vb_e);
+                    let omega_e = -kab * vsig * estar / rho_bar; // Ω_ab = omega_e · ê
+                    o.dv_diss -= dab * (rb.m * pi);
+                    o.de_diss -= rb.m * omega_e * e.dot(&dab);
+                }
+            },
+        );
+        sys.stats.seconds_forces += t0.elapsed().as_secs_f64();
+        sys.stats.force_pairs = sys.neighbours.total_pairs() as u64;
+        sys.stats.total_pairs += sys.stats.force_pairs;
+        let g = sys.gravity;
+        let p = &mut sys.particles;
+        let cs = &p.sound_speed;
+        let vel = &p.vel;
+        p.acc
+            .par_iter_mut()
+            .zip(p.dudt.par_iter_mut())
+            .zip(p.v_sig.par_iter_mut())
+            .zip(out.par_iter())
+            .enumerate()
+            .for_each(|(a, (((acc, du), vs), o))| {
+                let m = recs[a].m;
+                let dv_hydro = o.dv / m;
+                *acc = dv_hydro + o.dv_diss + g;
+                // du/dt = (A_a/m_a) Σ X_b v_ab·g_a + de_diss − v_a·dv_diss (spec §6.3)
+                *du = recs[a].a / m * o.du_hydro + o.de_diss - vel[a].dot(&o.dv_diss);
+                *vs = o.vsig.max(cs[a]);
+            });
+        Ok(())
+    }
+
+    fn end_step(&mut self, sys: &mut System<D>, dt: f64) {
+        if !self.params.triggers {
+            return;
+        }
+        triggers::update(sys, &self.params, self.prev_div_slot, dt, self.first_step);
+        self.first_step = false;
+    }
+}

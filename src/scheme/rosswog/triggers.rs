@@ -1,0 +1,112 @@
+//! The dissipation parameter K_a (Rosswog spec §7.1, Eqs. 80–96): raised at once to
+//! K_des = max(K_shock, K_noise), otherwise decaying with τ = χ h / c_s.
+//!
+//! Decisions the paper leaves open (spec §7.1 (a)–(d), made here in one place):
+//! (a) the noise sums include b = a; (b) d(∇·v)/dt = [(∇·v)ⁿ − (∇·v)ⁿ⁻¹]/Δt between full
+//! steps, A = 0 on the first step; (c) K is updated once per full step, outside the RK stages:
+//! Kⁿ⁺¹ = max(K_des, K_min + (Kⁿ − K_min) e^{−Δt/τ}); (d) the noise sums run over all
+//! neighbours within the support. ∇·v is the fIA estimate of the latest evaluation.
+
+use super::RosswogParams;
+use crate::system::System;
+use rayon::prelude::*;
+
+#[derive(Clone, Copy, Default)]
+struct NoiseSums {
+    s1: f64,
+    s2: f64,
+    pos_sum: f64,
+    pos_n: u32,
+    neg_sum: f64,
+    neg_n: u32,
+}
+
+impl NoiseSums {
+    fn add(&mut self, d: f64) {
+        self.s1 += d;
+        self.s2 += d.abs();
+        if d > 0.0 {
+            self.pos_sum += d;
+            self.pos_n += 1;
+        } else if d < 0.0 {
+            self.neg_sum += d;
+            self.neg_n += 1;
+        }
+    }
+}
+
+pub fn update<const D: usize>(
+    sys: &mut System<D>,
+    prm: &RosswogParams,
+    prev_slot: usize,
+    dt: f64,
+    first: bool,
+) {
+    let n = sys.particles.len();
+    let mut sums = vec![NoiseSums::default(); n];
+    {
+        let p = &sys.particles;
+        let k = &sys.kernel;
+        sys.gather(&mut sums, |a, s, pr| {
+            if pr.r < k.radius(p.h[a]) {
+                s.add(p.div_v[pr.b]);
+            }
+        });
+    }
+    let p = &mut sys.particles;
+    let (div, cs, h) = (&p.div_v, &p.sound_speed, &p.h);
+    let prev = &p.extra_scalars[prev_slot];
+    let new_k: Vec<f64> = (0..n)
+        .into_par_iter()
+        .map(|a| {
+            let mut s = sums[a];
+            s.add(div[a]); // (a) self included
+            let c_over_h = cs[a] / h[a];
+            // shock (Eqs. 85–86)
+            let ddiv = if first || dt <= 0.0 {
+                0.0
+            } else {
+                (div[a] - prev[a]) / dt
+            };
+            let big_a = (-ddiv).max(0.0);
+            let k_shock = if big_a > 0.0 {
+                prm.k_max * big_a / (big_a + c_over_h * c_over_h)
+            } else {
+                0.0
+            };
+            // noise 1 (Eqs. 87–89, 94)
+            let s1 = if div[a] < 0.0 { -s.s1 } else { s.s1 };
+            let n1 = if s.s2 > 0.0 {
+                (s1 / s.s2 - 1.0).abs()
+            } else {
+                0.0
+            };
+            let kappa1 = n1 / (n1 + prm.n_noise);
+            // noise 2 (Eqs. 90–92, 95)
+            let n2 = if s.pos_n > 0 && s.neg_n > 0 {
+                let sp = s.pos_sum / s.pos_n as f64;
+                let sm = -s.neg_sum / s.neg_n as f64;
+                (sp * sm).sqrt()
+            } else {
+                0.0
+            };
+            let kappa2 = if n2 > 0.0 {
+                n2 / (n2 + 0.2 * c_over_h)
+            } else {
+                0.0
+            };
+            let k_noise = prm.k_max * kappa1.max(kappa2);
+            let k_des = k_shock.max(k_noise);
+            (k_des, c_over_h)
+        })
+        .zip(p.alpha.par_iter())
+        .map(|((k_des, c_over_h), &k_old)| {
+            let tau = prm.chi / c_over_h.max(1e-300);
+            let decayed = prm.k_min + (k_old - prm.k_min) * (-dt / tau).exp();
+            k_des.max(decayed).max(prm.k_min)
+        })
+        .collect();
+    p.alpha = new_k;
+    let d = p.div_v.clone();
+    p.extra_scalars[prev_slot] = d;
+}
