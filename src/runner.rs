@@ -82,6 +82,8 @@ pub struct RunSummary {
     pub initial: crate::sim::Diagnostics,
     pub last: crate::sim::Diagnostics,
     pub shock_tube: Option<ShockTubeErrors>,
+    /// Gresho vortex: L1 of the velocity, Rosswog Eq. 106.
+    pub vortex_l1: Option<f64>,
     pub plot: Option<PathBuf>,
     /// Wall-clock seconds per phase: neighbour lists, density/h, gradients, forces.
     pub phase_seconds: [f64; 4],
@@ -229,6 +231,7 @@ fn run_dim<const D: usize>(
         initial,
         last,
         shock_tube: None,
+        vortex_l1: None,
         plot: None,
         phase_seconds: {
             let st = &sim.sys.stats;
@@ -243,8 +246,36 @@ fn run_dim<const D: usize>(
         mean_h_iterations: sim.sys.stats.h_iterations_total / sim.sys.stats.h_solves.max(1) as f64,
         neighbour_list_builds: sim.sys.verlet.builds,
     };
-    if let Some(v) = &case.verify {
-        verify_riemann(case, v, &sim, out, &mut summary)?;
+    match &case.verify {
+        Some(crate::case::Verify::Riemann {
+            x0,
+            left,
+            right,
+            x_min,
+            x_max,
+        }) => {
+            let v = RiemannCheck {
+                x0: *x0,
+                left: *left,
+                right: *right,
+                x_min: *x_min,
+                x_max: *x_max,
+            };
+            verify_riemann(case, &v, &sim, out, &mut summary)?;
+        }
+        Some(crate::case::Verify::Gresho(g)) => {
+            let p = &sim.sys.particles;
+            let pts: Vec<([f64; 2], [f64; 2])> = (0..p.len())
+                .map(|i| {
+                    (
+                        [p.pos[i][0], p.pos[i][1.min(D - 1)]],
+                        [p.vel[i][0], p.vel[i][1.min(D - 1)]],
+                    )
+                })
+                .collect();
+            summary.vortex_l1 = Some(g.l1(&pts));
+        }
+        None => {}
     }
     let path = out.join("summary.json");
     std::fs::write(
@@ -255,9 +286,17 @@ fn run_dim<const D: usize>(
     Ok(summary)
 }
 
+struct RiemannCheck {
+    x0: f64,
+    left: [f64; 3],
+    right: [f64; 3],
+    x_min: Option<f64>,
+    x_max: Option<f64>,
+}
+
 fn verify_riemann<const D: usize>(
     case: &Case,
-    v: &crate::case::VerifyRiemann,
+    v: &RiemannCheck,
     sim: &Simulation<D>,
     out: &Path,
     summary: &mut RunSummary,

@@ -202,6 +202,9 @@ fn main() -> ExitCode {
                             e.l1_density, e.l1_velocity, e.l1_pressure, e.particles
                         );
                     }
+                    if let Some(l1) = s.vortex_l1 {
+                        println!("L1(v) against the stationary Gresho vortex: {l1:.4e}");
+                    }
                     if let Some(p) = s.plot {
                         println!("profile plot: {}", p.display());
                     }

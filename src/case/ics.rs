@@ -161,6 +161,14 @@ fn state_of<const D: usize>(case: &Case, r: &Region, x: &Vector<D>) -> State<D> 
             vel += d * (vr / n);
         }
     }
+    let mut u = u;
+    if let Some(g) = &r.gresho {
+        let v = g.velocity(x[0], x[1]);
+        vel[0] += v[0];
+        vel[1] += v[1];
+        let rr = (x[0] - g.center[0]).hypot(x[1] - g.center[1]);
+        u = case.eos.internal_energy(rho, g.pressure(rr));
+    }
     State { rho, u, vel }
 }
 

@@ -57,27 +57,25 @@ pub struct Case {
     pub gravity: Option<Vec<f64>>,
     /// Exact solution to compare with after the run.
     #[serde(default)]
-    pub verify: Option<VerifyRiemann>,
+    pub verify: Option<Verify>,
 }
 
-/// `[verify]`: a 1D Riemann problem along x (shock tubes), states as [ρ, v, P].
+/// `[verify]`: the exact solution to compare with after the run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct VerifyRiemann {
-    #[serde(rename = "type")]
-    pub kind: VerifyKind,
-    pub x0: f64,
-    pub left: [f64; 3],
-    pub right: [f64; 3],
-    /// Only particles with x in [x_min, x_max] enter the norms.
-    pub x_min: Option<f64>,
-    pub x_max: Option<f64>,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum VerifyKind {
-    Riemann,
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Verify {
+    /// A 1D Riemann problem along x (shock tubes), states as [ρ, v, P]; L1 of ρ, v, P and a
+    /// profile plot.
+    Riemann {
+        x0: f64,
+        left: [f64; 3],
+        right: [f64; 3],
+        /// Only particles with x in [x_min, x_max] enter the norms.
+        x_min: Option<f64>,
+        x_max: Option<f64>,
+    },
+    /// The Gresho–Chan vortex: L1 of the velocity (Rosswog Eq. 106).
+    Gresho(crate::verify::vortex::Gresho),
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -220,6 +218,9 @@ pub struct Region {
     /// Extra radial velocity v_r·(x − radial_center)/|x − radial_center| (e.g. Noh: −1).
     pub radial_velocity: Option<f64>,
     pub radial_center: Option<Vec<f64>>,
+    /// Gresho–Chan vortex (2D): adds its velocity and its pressure profile (replacing
+    /// `pressure`; ρ stays `density`).
+    pub gresho: Option<crate::verify::vortex::Gresho>,
     #[serde(default)]
     pub material: u16,
 }
@@ -450,13 +451,21 @@ impl Case {
         if let Some(g) = &self.gravity {
             self.vec_len("gravity", g)?;
         }
-        if let Some(v) = &self.verify {
+        if let Some(Verify::Gresho(g)) = &self.verify {
+            if self.case.dimension != 2 {
+                return Err(CaseError(
+                    "verify: the Gresho vortex needs case.dimension = 2".into(),
+                ));
+            }
+            g.validate("verify")?;
+        }
+        if let Some(Verify::Riemann { left, right, .. }) = &self.verify {
             if !matches!(self.eos, EosConfig::IdealGas { .. }) {
                 return Err(CaseError(
                     "verify: the Riemann solution needs eos.type = \"ideal-gas\"".into(),
                 ));
             }
-            for (k, s) in [("left", v.left), ("right", v.right)] {
+            for (k, s) in [("left", *left), ("right", *right)] {
                 if !(s.iter().all(|x| x.is_finite()) && s[0] >= 0.0 && s[2] >= 0.0) {
                     return Err(CaseError(format!(
                         "verify.{k}: must be [ρ ≥ 0, v, P ≥ 0], finite, got {s:?}"
@@ -572,6 +581,15 @@ impl Case {
         }
         if let Some(c) = &r.radial_center {
             self.vec_len(&key("radial_center"), c)?;
+        }
+        if let Some(g) = &r.gresho {
+            if self.case.dimension != 2 {
+                return Err(CaseError(format!(
+                    "{}: only in 2D (case.dimension = 2)",
+                    key("gresho")
+                )));
+            }
+            g.validate(&key("gresho"))?;
         }
         Ok(())
     }

@@ -29,12 +29,17 @@ struct HSolve {
 /// Make the neighbour lists valid, solve h and ρ for every particle (X = m), compute Ω, then
 /// cut the working list to the final supports.
 pub fn solve_density_and_h<const D: usize>(sys: &mut System<D>) {
-    solve_density_and_h_weighted(sys, None)
+    solve_density_and_h_weighted(sys, None, true)
 }
 
 /// As [`solve_density_and_h`] with volume weights X (`None`: X = m). X is held fixed during
-/// the solve (Rosswog §7.2: P, and so X = P^k, frozen while V ↔ h iterate).
-pub fn solve_density_and_h_weighted<const D: usize>(sys: &mut System<D>, weights: Option<&[f64]>) {
+/// the solve (Rosswog §7.2: P, and so X = P^k, frozen while V ↔ h iterate). `compact`: cut
+/// the working list afterwards (skip it when another solve follows at once).
+pub fn solve_density_and_h_weighted<const D: usize>(
+    sys: &mut System<D>,
+    weights: Option<&[f64]>,
+    compact: bool,
+) {
     let mut rounds = 0;
     let mut iters = 0u64;
     let mut rebuilds = 0;
@@ -77,7 +82,9 @@ pub fn solve_density_and_h_weighted<const D: usize>(sys: &mut System<D>, weights
     sys.stats.h_iterations_total += sys.stats.h_iterations;
     sys.stats.h_solves += 1;
     sys.stats.total_pairs += (sys.verlet.list.total_pairs() as f64 * sys.stats.h_iterations) as u64;
-    sys.compact_neighbours();
+    if compact {
+        sys.compact_neighbours();
+    }
 }
 
 /// κ(h) = Σ X_b W_ab(h) and ∂κ/∂h over a's listed neighbours (+ self).

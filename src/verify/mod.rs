@@ -2,6 +2,7 @@
 
 pub mod lattice;
 pub mod riemann;
+pub mod vortex;
 
 use riemann::{ExactRiemann, Primitive};
 

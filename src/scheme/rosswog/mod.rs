@@ -222,11 +222,12 @@ impl Rosswog {
     /// Density, h and pressure; for X = P^k the ρ–P loop of spec §7.2 (steps a–e).
     fn density<const D: usize>(&self, sys: &mut System<D>) -> Vec<f64> {
         let x = self.weights(sys);
-        solve_density_and_h_weighted(sys, x.as_deref());
+        let again = self.params.volume == VolumeElement::Pressure;
+        solve_density_and_h_weighted(sys, x.as_deref(), !again);
         sys.update_eos();
-        if self.params.volume == VolumeElement::Pressure {
+        if again {
             let x = self.weights(sys).expect("X = P^k");
-            solve_density_and_h_weighted(sys, Some(&x));
+            solve_density_and_h_weighted(sys, Some(&x), true);
             sys.update_eos();
             return x;
         }
