@@ -25,6 +25,9 @@ use crate::system::System;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+/// Relative approach speed (in units of the sound speed) below which a pair counts as at rest.
+pub const APPROACH_TOLERANCE: f64 = 1e-9;
+
 /// Volume weight X of V_a = X_a / Σ_b X_b W_ab(h_a).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -364,7 +367,10 @@ impl<const D: usize> Scheme<D> for Rosswog {
                     ra.c.max(rb.c) - w.min(0.0)
                 };
                 o.vsig = o.vsig.max(vsig);
-                if w < 0.0 {
+                // "Approaching" (spec §6.4: v_ab·r_ab < 0) beyond round-off: without this margin a
+                // static state's ±1e-16 velocities switch on the e* conduction term — which does
+                // not scale with w — across every density jump (our decision; the paper is silent).
+                if w < -APPROACH_TOLERANCE * ra.c.max(rb.c) {
                     // Newtonian Chow–Monaghan dissipation (spec §6.4) with D_ab = ½(g_a + g_b).
                     let dab = (ga + gb) * 0.5;
                     let kab = 0.5 * (ra.k + rb.k);
