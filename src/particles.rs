@@ -24,6 +24,8 @@ pub struct Particles<const D: usize> {
     pub material: Vec<u16>,
     /// Stable particle id (survives reordering).
     pub id: Vec<u32>,
+    /// Frozen particles take part in every sum but never move (boundary layers).
+    pub frozen: Vec<bool>,
     /// dv/dt from the latest evaluation.
     pub acc: Vec<Vector<D>>,
     /// du/dt from the latest evaluation.
@@ -63,6 +65,7 @@ impl<const D: usize> Particles<D> {
         self.h.push(h);
         self.material.push(mat);
         self.id.push(id);
+        self.frozen.push(false);
         self.acc.push(Vector::zeros());
         self.dudt.push(0.0);
         self.omega.push(1.0);
@@ -106,6 +109,7 @@ impl<const D: usize> Particles<D> {
         ap(&mut self.h, perm);
         ap(&mut self.material, perm);
         ap(&mut self.id, perm);
+        ap(&mut self.frozen, perm);
         ap(&mut self.acc, perm);
         ap(&mut self.dudt, perm);
         ap(&mut self.omega, perm);
@@ -118,6 +122,18 @@ impl<const D: usize> Particles<D> {
         }
         for s in &mut self.extra_vectors {
             ap(s, perm);
+        }
+    }
+
+    /// Zero the derivatives of frozen particles (after every evaluation), so no integrator
+    /// moves them or changes their energy.
+    pub fn hold_frozen(&mut self) {
+        for i in 0..self.len() {
+            if self.frozen[i] {
+                self.acc[i] = Vector::zeros();
+                self.dudt[i] = 0.0;
+                self.vel[i] = Vector::zeros();
+            }
         }
     }
 

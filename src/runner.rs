@@ -180,11 +180,19 @@ fn run_dim<const D: usize>(
     let every = case.output.snapshot_every;
     let start = Instant::now();
     let mut updates = 0.0;
-    let mut next_snap = if every > 0.0 { every } else { t_end };
+    let mut snap_index = 1u64;
     let mut diag_err = None;
     let result = (|| -> Result<(), RunError> {
         while sim.time < t_end {
-            let target = next_snap.min(t_end);
+            // Targets by index (no accumulated rounding); a target within 1e-9 of t_end is t_end.
+            let mut target = if every > 0.0 {
+                (every * snap_index as f64).min(t_end)
+            } else {
+                t_end
+            };
+            if t_end - target <= 1e-9 * t_end {
+                target = t_end;
+            }
             sim.advance_to(target, |s| {
                 updates += s.sys.particles.len() as f64;
                 if s.steps % case.output.diagnostics_every == 0 {
@@ -211,7 +219,7 @@ fn run_dim<const D: usize>(
                 return Err(e);
             }
             snaps.write(&sim)?;
-            next_snap += every;
+            snap_index += 1;
         }
         Ok(())
     })();

@@ -117,6 +117,7 @@ impl<const D: usize> Simulation<D> {
             time: 0.0,
             step: 0,
         })?;
+        sys.particles.hold_frozen();
         let sim = Self {
             sys,
             scheme,

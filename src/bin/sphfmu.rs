@@ -8,10 +8,20 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 const RUN_HELP: &str = "\
-Schemes (scheme.name): standard — traditional grad-h SPH, Monaghan–Gingold viscosity with \
-Balsara switch, optional artificial conductivity.
-Kernels (kernel.name): cubic-spline, quartic-spline, quintic-spline, septic-spline, \
-wendland-c2, wendland-c4, wendland-c6, sinc (kernel.sinc_n = 3..9).
+Schemes and presets (scheme.name):
+  standard      traditional grad-h SPH, Monaghan-Gingold viscosity (alpha, beta), Balsara
+                switch, optional artificial conductivity
+  rpsph         relative-pressure SPH (Abel 2011): gradient = own-h | symmetric, shock_switch
+  rosswog-f1    Rosswog 2015 F1: IA gradients, X = P^k (k = 0.05), triggered dissipation,
+                Wendland C6 eta = 2.2, SSP-RK3, CFL 0.5
+  rosswog-f2    as F1 with kernel gradients and grad-h terms
+  rosswog-f3    as F1 with X = m
+  rosswog-f4    kernel gradients, X = m, constant K = 1, M4 eta = 1.2 ('standard SPH')
+  Rosswog keys override a preset: volume (one|mass|pressure), k, gradient
+  (kernel|integral-approximation), triggers, k_constant, k_max, n_noise, chi, k_min,
+  signal_velocity (galilean|literal).
+Kernels (kernel.name): cubic-spline, quartic-spline, quintic-spline, septic-spline,
+  wendland-c2, wendland-c4, wendland-c6, sinc (kernel.sinc_n = 3..9), liq, qcm6.
 Integrators (time.integrator): leapfrog, ssp-rk3, crk-rk2.
 Exit codes: 0 done, 2 bad case file, 3 unstable run (snapshots so far kept), 4 I/O error.";
 

@@ -252,6 +252,15 @@ pub fn generate_particles<const D: usize>(
             p.vel[i] = sl.vel + (sr.vel - sl.vel) * w;
         }
     }
+    let margin = case.domain.frozen_margin;
+    if margin > 0.0 {
+        for (x, f) in p.pos.iter().zip(p.frozen.iter_mut()) {
+            *f = (0..D).any(|k| {
+                domain.kind[k] != crate::domain::BoundaryKind::Periodic
+                    && (x[k] - domain.lo[k] < margin || domain.hi[k] - x[k] < margin)
+            });
+        }
+    }
     if let Some(pert) = &case.perturbation {
         let mut rng = SplitMix64::new(pert.seed);
         for (x, &spacing) in p.pos.iter_mut().zip(&spacing_of) {

@@ -95,6 +95,10 @@ pub struct DomainConfig {
     pub max: Vec<f64>,
     /// One per axis: "open", "periodic" or "reflect".
     pub boundary: Vec<BoundaryKind>,
+    /// Particles within this distance of a non-periodic face are frozen: they keep their
+    /// initial state and position and act as a boundary layer (Rosswog §8.3's noise box).
+    #[serde(default)]
+    pub frozen_margin: f64,
 }
 
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
@@ -358,6 +362,12 @@ impl Case {
                     self.domain.min[k], self.domain.max[k]
                 )));
             }
+        }
+        let fm = self.domain.frozen_margin;
+        if !(fm.is_finite() && fm >= 0.0) {
+            return Err(CaseError(format!(
+                "domain.frozen_margin: must be a finite number ≥ 0, got {fm}"
+            )));
         }
         self.eos.validate()?;
         let eta = self.eta()?;

@@ -147,6 +147,7 @@ impl<const D: usize> Integrator<D> {
                 }
                 sys.predict_h(dt);
                 scheme.evaluate(sys)?;
+                sys.particles.hold_frozen();
                 let p = &mut sys.particles;
                 let (sv, su) = (&self.saved.vel, &self.saved.u);
                 p.vel
@@ -165,13 +166,16 @@ impl<const D: usize> Integrator<D> {
                 combine(sys, &s0, 0.0, 1.0, dt);
                 sys.predict_h(dt);
                 scheme.evaluate(sys)?;
+                sys.particles.hold_frozen();
                 combine(sys, &s0, 0.75, 0.25, dt);
                 sys.predict_h(-0.5 * dt);
                 scheme.evaluate(sys)?;
+                sys.particles.hold_frozen();
                 combine(sys, &s0, 1.0 / 3.0, 2.0 / 3.0, dt);
                 enforce_boundaries(sys);
                 sys.predict_h(0.5 * dt);
                 scheme.evaluate(sys)?;
+                sys.particles.hold_frozen();
                 self.saved = s0;
             }
             IntegratorKind::CrkRk2 => {
@@ -181,6 +185,7 @@ impl<const D: usize> Integrator<D> {
                 combine(sys, &s0, 0.0, 1.0, 0.5 * dt);
                 sys.predict_h(dt);
                 scheme.evaluate(sys)?;
+                sys.particles.hold_frozen();
                 // full step from the start state with the midpoint derivatives
                 {
                     let p = &mut sys.particles;
@@ -199,6 +204,7 @@ impl<const D: usize> Integrator<D> {
                 enforce_boundaries(sys);
                 sys.predict_h(0.5 * dt);
                 scheme.refresh(sys);
+                sys.particles.hold_frozen();
                 self.saved = s0;
             }
         }
