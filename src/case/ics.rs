@@ -261,6 +261,9 @@ pub fn generate_particles<const D: usize>(
             });
         }
     }
+    if let Some(g) = &case.glass {
+        super::glass::relax(&mut p, domain, g, &spacing_of);
+    }
     if let Some(pert) = &case.perturbation {
         let mut rng = SplitMix64::new(pert.seed);
         for (x, &spacing) in p.pos.iter_mut().zip(&spacing_of) {

@@ -1,8 +1,10 @@
 //! Case files (`models/*.toml`): a scenario as data. Parsed with serde (unknown keys are
 //! errors), then validated range by range; every error names the key and the allowed range.
 
+mod glass;
 mod ics;
 
+pub use glass::GlassConfig;
 pub use ics::generate_particles;
 
 use crate::domain::{BoundaryKind, Domain};
@@ -52,6 +54,9 @@ pub struct Case {
     pub interfaces: Vec<Interface>,
     #[serde(default)]
     pub perturbation: Option<Perturbation>,
+    /// Relax the initial lattice into a glass (Rosswog spec §8.1).
+    #[serde(default)]
+    pub glass: Option<GlassConfig>,
     /// Uniform body force per unit mass (length = dimension).
     #[serde(default)]
     pub gravity: Option<Vec<f64>>,
@@ -460,6 +465,9 @@ impl Case {
         }
         if let Some(g) = &self.gravity {
             self.vec_len("gravity", g)?;
+        }
+        if let Some(g) = &self.glass {
+            g.validate()?;
         }
         if let Some(Verify::Gresho(g)) = &self.verify {
             if self.case.dimension != 2 {
