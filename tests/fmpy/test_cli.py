@@ -7,7 +7,7 @@ import meshio
 import numpy as np
 import pytest
 
-from conftest import run
+from conftest import ROOT, run
 
 
 @pytest.fixture(scope="module")
@@ -75,7 +75,19 @@ def test_bad_case_exits_2_with_one_line(sphfmu_bin, models, tmp_path):
     assert "kernel.eta" in r.stderr and "[0.5, 5]" in r.stderr
 
 
-@pytest.mark.parametrize("case", ["sod.toml", "noh2d.toml"])
-def test_every_model_validates(sphfmu_bin, models, case):
-    r = run([sphfmu_bin, "check", str(models / case)])
+MODELS = sorted(p.name for p in (ROOT / "models").glob("*.toml"))
+
+
+@pytest.mark.parametrize("case", MODELS)
+def test_every_model_builds(sphfmu_bin, models, case):
+    # generate the particles and evaluate the initial state, as `run` would
+    r = run([sphfmu_bin, "check", "--build", str(models / case)])
     assert r.returncode == 0, r.stderr
+    assert "particles" in r.stdout
+
+
+def test_run_help_lists_the_presets(sphfmu_bin):
+    r = run([sphfmu_bin, "run", "--help"])
+    assert r.returncode == 0
+    for preset in ("standard", "rpsph", "rosswog-f1", "rosswog-f2", "rosswog-f3", "rosswog-f4"):
+        assert preset in r.stdout, preset
