@@ -69,7 +69,7 @@ impl SchemeConfig {
     pub fn build<const D: usize>(&self) -> Box<dyn Scheme<D>> {
         match *self {
             SchemeConfig::Standard(p) => Box::new(standard::StandardSph::new(p)),
-            SchemeConfig::Rpsph(p) => Box::new(rpsph::Rpsph::new(p)),
+            SchemeConfig::Rpsph(p) => Box::new(rpsph::build(p)),
             _ => {
                 let (preset, o) = self.rosswog().expect("rosswog variant");
                 Box::new(rosswog::Rosswog::new(preset, o.resolve(preset)))

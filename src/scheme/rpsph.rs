@@ -4,9 +4,7 @@
 //! force for any particle arrangement (Newton's first law), at the price of exact momentum
 //! and energy conservation: the runner reports the momentum drift.
 
-use super::standard::{check_range, force_pass, velocity_gradients, PressureForm, StandardParams};
-use super::{smoothing, Scheme, SchemeError};
-use crate::system::System;
+use super::standard::{check_range, PressureForm, StandardParams, StandardSph};
 use serde::{Deserialize, Serialize};
 
 /// Which kernel gradient the relative-pressure force uses.
@@ -64,40 +62,11 @@ impl RpsphParams {
     }
 }
 
-pub struct Rpsph {
-    params: RpsphParams,
-    balsara_slot: usize,
-}
-
-impl Rpsph {
-    pub fn new(params: RpsphParams) -> Self {
-        Self {
-            params,
-            balsara_slot: usize::MAX,
-        }
-    }
-}
-
-impl<const D: usize> Scheme<D> for Rpsph {
-    fn name(&self) -> &'static str {
-        "rpsph"
-    }
-
-    fn init(&mut self, sys: &mut System<D>) {
-        self.balsara_slot = sys.particles.add_scalar_field(1.0);
-        let alpha = self.params.alpha;
-        sys.particles.alpha.iter_mut().for_each(|a| *a = alpha);
-    }
-
-    fn evaluate(&mut self, sys: &mut System<D>) -> Result<(), SchemeError> {
-        smoothing::solve_density_and_h(sys);
-        sys.update_eos();
-        velocity_gradients(sys, self.balsara_slot, self.params.balsara);
-        let form = PressureForm::Relative {
-            symmetric: self.params.gradient == RpsphGradient::Symmetric,
-            shock_switch: self.params.shock_switch,
-        };
-        force_pass(sys, &self.params.viscosity(), self.balsara_slot, form);
-        Ok(())
-    }
+/// rpSPH is the standard scheme with the relative-pressure force (one pair loop for both).
+pub fn build(params: RpsphParams) -> StandardSph {
+    let form = PressureForm::Relative {
+        symmetric: params.gradient == RpsphGradient::Symmetric,
+        shock_switch: params.shock_switch,
+    };
+    StandardSph::with_form(params.viscosity(), form, "rpsph")
 }

@@ -71,14 +71,27 @@ impl StandardParams {
 
 pub struct StandardSph {
     params: StandardParams,
+    /// Standard grad-h pressure force, or rpSPH's relative-pressure form (see `rpsph`).
+    form: PressureForm,
+    name: &'static str,
     /// Slot of the Balsara factor in `extra_scalars`.
     balsara_slot: usize,
 }
 
 impl StandardSph {
     pub fn new(params: StandardParams) -> Self {
+        Self::with_form(params, PressureForm::GradH, "standard")
+    }
+
+    pub(crate) fn with_form(
+        params: StandardParams,
+        form: PressureForm,
+        name: &'static str,
+    ) -> Self {
         Self {
             params,
+            form,
+            name,
             balsara_slot: usize::MAX,
         }
     }
@@ -151,7 +164,7 @@ pub(crate) fn curl_norm<const D: usize>(g: &nalgebra::SMatrix<f64, D, D>) -> f64
 
 impl<const D: usize> Scheme<D> for StandardSph {
     fn name(&self) -> &'static str {
-        "standard"
+        self.name
     }
 
     fn init(&mut self, sys: &mut System<D>) {
@@ -164,7 +177,7 @@ impl<const D: usize> Scheme<D> for StandardSph {
         smoothing::solve_density_and_h(sys);
         sys.update_eos();
         velocity_gradients(sys, self.balsara_slot, self.params.balsara);
-        force_pass(sys, &self.params, self.balsara_slot, PressureForm::GradH);
+        force_pass(sys, &self.params, self.balsara_slot, self.form);
         Ok(())
     }
 }
