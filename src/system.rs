@@ -25,6 +25,10 @@ pub struct EvalStats {
     pub h_solves: u64,
     /// Particles whose h hit the cap `h_max`.
     pub h_capped: u64,
+    /// Particles whose IA matrix τ was near-singular (kernel-gradient fallback), latest
+    /// evaluation and summed over the run.
+    pub ia_fallbacks: u64,
+    pub ia_fallbacks_total: u64,
     /// Wall-clock seconds spent per phase since the counters were last reset
     /// (neighbour lists, h/density solve, gradients, forces).
     pub seconds_neighbours: f64,

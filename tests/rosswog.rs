@@ -3,7 +3,7 @@
 use sphfmu::case::Case;
 use sphfmu::particles::Vector;
 use sphfmu::runner::run_case;
-use sphfmu::scheme::rosswog::gradients::ia_pass;
+use sphfmu::scheme::rosswog::gradients::{field_gradient, GradientEstimator};
 
 fn hex_box(perturb: f64) -> String {
     format!(
@@ -37,56 +37,48 @@ seed = 5
     )
 }
 
-/// Mean |∂f/∂x − 1| for f = x with the kernel (SPH), IA and fIA gradients (spec §3.6).
-fn gradient_errors(perturb: f64) -> (f64, f64, f64) {
-    let mut sim = Case::parse(&hex_box(perturb))
+/// Mean |∇f − x̂| for f = x with each estimator of spec §3 (kernel, CE, LE, fIA, IA).
+fn gradient_errors(perturb: f64) -> [f64; 5] {
+    use GradientEstimator::*;
+    let sim = Case::parse(&hex_box(perturb))
         .unwrap()
         .build::<2>()
         .unwrap();
-    let (mats, _, fallbacks) = ia_pass(&mut sim.sys);
-    assert_eq!(fallbacks, 0);
-    let n = sim.sys.particles.len();
-    let mut sums = vec![
-        (
-            Vector::<2>::zeros(),
-            Vector::<2>::zeros(),
-            Vector::<2>::zeros()
-        );
-        n
-    ];
+    let p = &sim.sys.particles;
+    let f: Vec<f64> = p.pos.iter().map(|x| x[0]).collect();
+    let mut out = [0.0; 5];
+    for (i, est) in [Kernel, ConstantExact, LinearExact, FullIntegral, Integral]
+        .into_iter()
+        .enumerate()
     {
-        let p = &sim.sys.particles;
-        let k = &sim.sys.kernel;
-        sim.sys.gather(&mut sums, |a, (sph, ia, fia), pr| {
-            let e = k.eval(pr.r, p.h[a]);
-            let vb = p.mass[pr.b] / p.rho[pr.b];
-            let fa = p.pos[a][0];
-            let fb = fa - pr.dx[0]; // x_b through the periodic image
-            *sph += pr.dx * (vb * fb * e.dwdr / pr.r);
-            let g = mats[a].c * (-pr.dx) * e.w;
-            *ia += g * (vb * fb);
-            *fia += g * (vb * (fb - fa));
-        });
-    }
-    let mean = |f: &dyn Fn(&(Vector<2>, Vector<2>, Vector<2>)) -> Vector<2>| -> f64 {
-        sums.iter()
-            .map(|s| (f(s) - Vector::<2>::new(1.0, 0.0)).norm())
+        // f at neighbour b through the periodic image: f_a − dx
+        let (g, fallbacks) =
+            field_gradient(&sim.sys, est, &f, |a, _b, dx: &Vector<2>| f[a] - dx[0]);
+        assert_eq!(fallbacks, 0);
+        out[i] = g
+            .iter()
+            .map(|v| (v - Vector::<2>::new(1.0, 0.0)).norm())
             .sum::<f64>()
-            / n as f64
-    };
-    (mean(&|s| s.0), mean(&|s| s.1), mean(&|s| s.2))
+            / g.len() as f64;
+    }
+    out
 }
 
 #[test]
 fn ia_gradient_is_exact_on_a_perfect_lattice_and_loses_the_edge_when_perturbed() {
-    let (sph, ia, fia) = gradient_errors(0.0);
-    println!("perfect hex lattice, M4 η=1.2: kernel {sph:.2e}, IA {ia:.2e}, fIA {fia:.2e}");
-    // spec §3.6: kernel gradient ~2.6e-2 (M4, η = 1.2); IA and fIA at round-off.
+    let [sph, ce, le, fia, ia] = gradient_errors(0.0);
+    println!("perfect hex lattice, M4 η=1.2: kernel {sph:.2e}, CE {ce:.2e}, LE {le:.2e}, fIA {fia:.2e}, IA {ia:.2e}");
+    // spec §3.6: kernel gradient ~2.6e-2 (M4, η = 1.2), CE = kernel on a perfect lattice,
+    // LE/fIA exact, IA ~10 orders better than the kernel gradient.
     assert!(sph > 5e-3, "kernel gradient unexpectedly exact: {sph:e}");
-    assert!(ia <= 1e-10 && fia <= 1e-10, "IA {ia:e}, fIA {fia:e}");
+    assert!((ce - sph).abs() < 1e-3 * sph, "CE {ce:e} vs kernel {sph:e}");
+    assert!(
+        ia <= 1e-10 && fia <= 1e-10 && le <= 1e-10,
+        "IA {ia:e}, fIA {fia:e}, LE {le:e}"
+    );
     // 1e-3 r_s (r_s = spacing/2): amplitude 5e-4 of the spacing.
-    let (sph_p, ia_p, fia_p) = gradient_errors(5e-4);
-    println!("perturbed by 1e-3 r_s: kernel {sph_p:.2e}, IA {ia_p:.2e}, fIA {fia_p:.2e}");
+    let [sph_p, ce_p, le_p, fia_p, ia_p] = gradient_errors(5e-4);
+    println!("perturbed by 1e-3 r_s: kernel {sph_p:.2e}, CE {ce_p:.2e}, LE {le_p:.2e}, fIA {fia_p:.2e}, IA {ia_p:.2e}");
     assert!(
         ia_p > 1e3 * ia.max(1e-16),
         "IA keeps its edge under perturbation: {ia_p:e}"
@@ -96,8 +88,8 @@ fn ia_gradient_is_exact_on_a_perfect_lattice_and_loses_the_edge_when_perturbed()
         "IA should degrade towards the kernel gradient: {ia_p:e} vs {sph_p:e}"
     );
     assert!(
-        fia_p <= 1e-10,
-        "fIA is linearly exact on any set: {fia_p:e}"
+        fia_p <= 1e-10 && le_p <= 1e-10,
+        "fIA and LE are linearly exact on any set: {fia_p:e}, {le_p:e}"
     );
 }
 

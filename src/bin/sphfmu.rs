@@ -199,6 +199,13 @@ fn main() -> ExitCode {
                         "time per phase: neighbours {:.2} s ({} list builds: {:.2} s), density/h {:.2} s ({:.2} iterations), gradients {:.2} s, forces {:.2} s",
                         ph[0], s.neighbour_list_builds, s.list_build_seconds, ph[1], s.mean_h_iterations, ph[2], ph[3]
                     );
+                    println!(
+                        "momentum change |P(t) - P(0)| / max Σ m|v|: {:.3e} (walls and gravity included; periodic boxes: the scheme's drift)",
+                        s.momentum_drift
+                    );
+                    if s.ia_fallbacks > 0 {
+                        println!("IA gradient fell back to the kernel gradient {} times (near-singular τ)", s.ia_fallbacks);
+                    }
                     let (e0, e1) = (s.initial.total_energy, s.last.total_energy);
                     println!(
                         "total energy {:.12e} -> {:.12e} (relative change {:.3e})",

@@ -137,3 +137,113 @@ pub fn ia_pass<const D: usize>(
     }
     (mats, grads, fallbacks)
 }
+
+/// The gradient estimators of Rosswog spec §3 (Eqs. 6, 10, 11–15, 21, 23–24).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GradientEstimator {
+    /// Σ_b V_b f_b ∇_a W_ab(h_a)
+    Kernel,
+    /// constant-exact: Σ_b V_b (f_b − f_a) ∇_a W_ab(h_a)
+    ConstantExact,
+    /// linearly exact (Price 2004): (Aᵀ)⁻¹ J with A^{ik} = Σ V_b (r_b − r_a)^i ∇^k W
+    LinearExact,
+    /// full integral approximation: C Σ_b V_b (f_b − f_a)(r_b − r_a) W
+    FullIntegral,
+    /// antisymmetric integral approximation: Σ_b V_b f_b C (r_b − r_a) W
+    Integral,
+}
+
+/// Gradient of the per-particle field `f` with estimator `est` at every particle, with
+/// V_b = m_b/ρ_b and a's own h. For fields that are not periodic, `f_of(a, b, dx)` gives the
+/// value of f at neighbour b as seen from a (dx = x_a − image(x_b)), e.g. f_a − dx for f = x.
+/// Particles whose matrix is singular get the kernel gradient (and are counted).
+pub fn field_gradient<const D: usize>(
+    sys: &System<D>,
+    est: GradientEstimator,
+    f: &[f64],
+    f_of: impl Fn(usize, usize, &Vector<D>) -> f64 + Sync,
+) -> (Vec<Vector<D>>, u64) {
+    let n = sys.particles.len();
+    // per particle: Σ V f ∇W, Σ V (f_b − f_a) ∇W, A, Σ V (f_b − f_a) d W, τ, Σ V f_b d W
+    type Sums<const D: usize> = (
+        Vector<D>,
+        Vector<D>,
+        SMatrix<f64, D, D>,
+        Vector<D>,
+        SMatrix<f64, D, D>,
+        Vector<D>,
+    );
+    let zero = || {
+        (
+            Vector::zeros(),
+            Vector::zeros(),
+            SMatrix::zeros(),
+            Vector::zeros(),
+            SMatrix::zeros(),
+            Vector::zeros(),
+        )
+    };
+    let mut acc: Vec<Sums<D>> = (0..n).map(|_| zero()).collect();
+    let p = &sys.particles;
+    let k = &sys.kernel;
+    sys.gather(&mut acc, |a, s, pr| {
+        let e = k.eval(pr.r, p.h[a]);
+        if e.w == 0.0 && e.dwdr == 0.0 {
+            return;
+        }
+        let vb = p.mass[pr.b] / p.rho[pr.b];
+        let fb = f_of(a, pr.b, &pr.dx);
+        let d: Vector<D> = -pr.dx; // r_b − r_a
+        let gw: Vector<D> = if pr.r > 0.0 {
+            pr.dx * (e.dwdr / pr.r)
+        } else {
+            Vector::zeros()
+        };
+        s.0 += gw * (vb * fb);
+        s.1 += gw * (vb * (fb - f[a]));
+        s.2 += d * gw.transpose() * vb;
+        s.3 += d * (vb * (fb - f[a]) * e.w);
+        s.4 += d * d.transpose() * (vb * e.w);
+        s.5 += d * (vb * fb * e.w);
+    });
+    let mut fallbacks = 0;
+    let out = acc
+        .iter()
+        .map(|s| {
+            let kernel = s.0 + Vector::<D>::zeros();
+            match est {
+                GradientEstimator::Kernel => kernel,
+                GradientEstimator::ConstantExact => s.1,
+                GradientEstimator::LinearExact => match invert_general(&s.2.transpose()) {
+                    Some(m) => m * s.1,
+                    None => {
+                        fallbacks += 1;
+                        kernel
+                    }
+                },
+                GradientEstimator::FullIntegral | GradientEstimator::Integral => match invert(&s.4)
+                {
+                    Some(c) => {
+                        c * if est == GradientEstimator::FullIntegral {
+                            s.3
+                        } else {
+                            s.5
+                        }
+                    }
+                    None => {
+                        fallbacks += 1;
+                        kernel
+                    }
+                },
+            }
+        })
+        .collect();
+    (out, fallbacks)
+}
+
+/// Inverse of a general (not necessarily symmetric) D×D matrix, None when near-singular.
+fn invert_general<const D: usize>(m: &SMatrix<f64, D, D>) -> Option<SMatrix<f64, D, D>> {
+    // (mᵀ m) is symmetric positive semi-definite: reuse the guarded analytic inverse.
+    let mtm = m.transpose() * m;
+    invert(&mtm).map(|inv| inv * m.transpose())
+}

@@ -303,6 +303,8 @@ impl<const D: usize> Scheme<D> for Rosswog {
         let t0 = std::time::Instant::now();
         let (mats, _grads, fallbacks) = gradients::ia_pass(sys);
         self.ia_fallbacks = fallbacks;
+        sys.stats.ia_fallbacks = fallbacks;
+        sys.stats.ia_fallbacks_total += fallbacks;
         sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
         let t0 = std::time::Instant::now();
         let n = sys.particles.len();
