@@ -235,6 +235,32 @@ impl<const D: usize> System<D> {
             });
     }
 
+    /// End of a force pass: record its timing and pair count, and write per particle
+    /// dv/dt (plus gravity), du/dt and the signal speed (at least c_s) from `derivs(a)`.
+    pub fn store_derivatives(
+        &mut self,
+        started: std::time::Instant,
+        derivs: impl Fn(usize) -> (Vector<D>, f64, f64) + Sync,
+    ) {
+        self.stats.seconds_forces += started.elapsed().as_secs_f64();
+        self.stats.force_pairs = self.neighbours.total_pairs() as u64;
+        self.stats.total_pairs += self.stats.force_pairs;
+        let g = self.gravity;
+        let p = &mut self.particles;
+        let cs = &p.sound_speed;
+        p.acc
+            .par_iter_mut()
+            .zip(p.dudt.par_iter_mut())
+            .zip(p.v_sig.par_iter_mut())
+            .enumerate()
+            .for_each(|(a, ((acc, du), vs))| {
+                let (dv, dudt, vsig) = derivs(a);
+                *acc = dv + g;
+                *du = dudt;
+                *vs = vsig.max(cs[a]);
+            });
+    }
+
     /// P and c_s from the EOS for every particle.
     pub fn update_eos(&mut self) {
         let eos = self.eos;

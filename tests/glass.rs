@@ -1,22 +1,14 @@
 //! Glass initial conditions (Rosswog spec §8.1): a relaxed, isotropic particle set with a
 //! near-perfect partition of unity.
 
+mod common;
+
 use sphfmu::case::Case;
 
 fn glass_case(seed: u64) -> String {
     format!(
         r#"
-[case]
-name = "glass"
-dimension = 2
-[domain]
-min = [0.0, 0.0]
-max = [1.0, 1.0]
-boundary = ["periodic", "periodic"]
-[eos]
-type = "ideal-gas"
-gamma = 1.6666666666666667
-[kernel]
+{header}[kernel]
 name = "wendland-c6"
 eta = 2.2
 [time]
@@ -27,7 +19,8 @@ density = 1.0
 pressure = 1.0
 [glass]
 seed = {seed}
-"#
+"#,
+        header = common::header(2, 0.0, 1.0, "periodic", 1.6666666666666667)
     )
 }
 

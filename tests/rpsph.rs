@@ -1,22 +1,14 @@
 //! rpSPH (Abel 2011): Newton's first law for any particle arrangement, and the static-lattice
 //! noise test of the rpSPH spec §3.1 against standard SPH.
 
+mod common;
+
 use sphfmu::case::Case;
 
 fn lattice(scheme: &str, extra: &str, perturb: f64) -> String {
     format!(
         r#"
-[case]
-name = "static-lattice"
-dimension = 2
-[domain]
-min = [0.0, 0.0]
-max = [1.0, 1.0]
-boundary = ["periodic", "periodic"]
-[eos]
-type = "ideal-gas"
-gamma = 1.4
-[kernel]
+{header}[kernel]
 name = "cubic-spline"
 eta = 1.2616
 [scheme]
@@ -32,7 +24,8 @@ pressure = 0.7142857142857143
 [perturbation]
 amplitude = {perturb}
 seed = 11
-"#
+"#,
+        header = common::header(2, 0.0, 1.0, "periodic", 1.4)
     )
 }
 

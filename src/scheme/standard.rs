@@ -346,21 +346,5 @@ pub(crate) fn force_pass<const D: usize>(
             },
         );
     }
-    sys.stats.seconds_forces += t0.elapsed().as_secs_f64();
-    sys.stats.force_pairs = sys.neighbours.total_pairs() as u64;
-    sys.stats.total_pairs += sys.stats.force_pairs;
-    let g = sys.gravity;
-    let p = &mut sys.particles;
-    let cs = &p.sound_speed;
-    p.acc
-        .par_iter_mut()
-        .zip(p.dudt.par_iter_mut())
-        .zip(p.v_sig.par_iter_mut())
-        .zip(out.par_iter())
-        .enumerate()
-        .for_each(|(a, (((acc, du), vs), o))| {
-            *acc = o.acc + g;
-            *du = o.dudt;
-            *vs = o.vsig.max(cs[a]);
-        });
+    sys.store_derivatives(t0, |a| (out[a].acc, out[a].dudt, out[a].vsig));
 }

@@ -387,27 +387,12 @@ impl<const D: usize> Scheme<D> for Rosswog {
                 }
             },
         );
-        sys.stats.seconds_forces += t0.elapsed().as_secs_f64();
-        sys.stats.force_pairs = sys.neighbours.total_pairs() as u64;
-        sys.stats.total_pairs += sys.stats.force_pairs;
-        let g = sys.gravity;
-        let p = &mut sys.particles;
-        let cs = &p.sound_speed;
-        let vel = &p.vel;
-        p.acc
-            .par_iter_mut()
-            .zip(p.dudt.par_iter_mut())
-            .zip(p.v_sig.par_iter_mut())
-            .zip(out.par_iter())
-            .enumerate()
-            .for_each(|(a, (((acc, du), vs), o))| {
-                let m = recs[a].m;
-                let dv_hydro = o.dv / m;
-                *acc = dv_hydro + o.dv_diss + g;
-                // du/dt = (A_a/m_a) Σ X_b v_ab·g_a + de_diss − v_a·dv_diss (spec §6.3)
-                *du = recs[a].a / m * o.du_hydro + o.de_diss - vel[a].dot(&o.dv_diss);
-                *vs = o.vsig.max(cs[a]);
-            });
+        sys.store_derivatives(t0, |a| {
+            let (o, m) = (&out[a], recs[a].m);
+            // du/dt = (A_a/m_a) Σ X_b v_ab·g_a + de_diss − v_a·dv_diss (spec §6.3)
+            let du = recs[a].a / m * o.du_hydro + o.de_diss - recs[a].v.dot(&o.dv_diss);
+            (o.dv / m + o.dv_diss, du, o.vsig)
+        });
         Ok(())
     }
 
