@@ -2,6 +2,7 @@
 //! driver and the integrators never know which scheme runs. Each formulation lives in its own
 //! module behind [`Scheme`]; all of them loop over pairs through [`System::gather`].
 
+pub mod crksph;
 pub mod rosswog;
 pub mod rpsph;
 pub mod smoothing;

@@ -1,0 +1,220 @@
+//! Linear reproducing kernels (CRKSPH spec §2; Frontiere, Raskin & Owen 2017, eqs 8–23).
+//!
+//! Volumes V_i = 1/Σ_j W(x_ij, h_i) (eq 75, gather kernel, self included). With the symmetrised
+//! kernel W_ij = ½[W(x_ij, h_i) + W(x_ij, h_j)] and ∇_i W_ij = ½[∇W(h_i) + ∇W(h_j)] the moments
+//! m0, m1, m2 and their gradients (eqs 16–21, sums over j including i) give
+//! B = −m2⁻¹ m1, A = 1/(m0 + B·m1), ∂A = −A²(∂m0 + 2 B^α ∂m1^α + B^α B^β ∂m2^{αβ}),
+//! ∂B^α = −M^{αβ}(∂m1^β + ∂m2^{βψ} B^ψ) (compact forms of eqs 14–15, spec §2.3), and the
+//! corrected kernel W^R_ij = A_i(1 + B_i·x_ij) W_ij with gradient G_ij (eq 9, spec §2.4).
+//! Gradients are with respect to the evaluation point x_i, V_j and h held fixed; every node,
+//! including i itself, stays where it is (so the self term contributes V_i W(0) δ^{αγ} to ∂m1).
+
+use crate::domain::Domain;
+use crate::neighbours::unpack;
+use crate::particles::Vector;
+use crate::scheme::rosswog::gradients::invert;
+use crate::system::System;
+use nalgebra::SMatrix;
+use rayon::prelude::*;
+
+/// Correction coefficients of one particle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RkCoefficients<const D: usize> {
+    pub a: f64,
+    pub b: Vector<D>,
+    pub grad_a: Vector<D>,
+    /// grad_b[(α, γ)] = ∂_γ B^α
+    pub grad_b: SMatrix<f64, D, D>,
+}
+
+/// Reproducing order: linear (the paper's default) or zeroth (B ≡ 0, exact angular momentum).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RkOrder {
+    Zeroth,
+    Linear,
+}
+
+impl<const D: usize> RkCoefficients<D> {
+    /// The coefficients of particle `i`'s mirror image `code` (vectors reflected, ∂B → R ∂B R).
+    pub fn reflected(&self, code: u8) -> Self {
+        if code == 0 {
+            return *self;
+        }
+        let flip = |k: usize| Domain::<D>::digit(code, k) != 0;
+        let mut out = *self;
+        for k in 0..D {
+            if flip(k) {
+                out.b[k] = -out.b[k];
+                out.grad_a[k] = -out.grad_a[k];
+            }
+        }
+        for i in 0..D {
+            for j in 0..D {
+                if flip(i) != flip(j) {
+                    out.grad_b[(i, j)] = -out.grad_b[(i, j)];
+                }
+            }
+        }
+        out
+    }
+
+    /// W^R_ij and its gradient G_ij for the pair separation x_ij = x_i − x_j with the
+    /// symmetrised kernel value `w` and gradient `gw` (spec §2.4).
+    #[inline]
+    pub fn corrected(&self, xij: &Vector<D>, w: f64, gw: &Vector<D>) -> (f64, Vector<D>) {
+        let lin = 1.0 + self.b.dot(xij);
+        let wr = self.a * lin * w;
+        // G^γ = A(1 + B·x)∂γW + ∂γA (1 + B·x) W + A(∂γB^α x^α + B^γ) W
+        let g = gw * (self.a * lin)
+            + self.grad_a * (lin * w)
+            + (self.grad_b.transpose() * xij + self.b) * (self.a * w);
+        (wr, g)
+    }
+}
+
+/// V_i = 1 / Σ_j W(x_ij, h_i), self included (eq 75).
+pub fn volumes<const D: usize>(sys: &System<D>) -> Vec<f64> {
+    let n = sys.particles.len();
+    let mut sums = vec![0.0; n];
+    let p = &sys.particles;
+    let k = &sys.kernel;
+    sys.gather(&mut sums, |a, s, pr| *s += k.w(pr.r, p.h[a]));
+    sums.iter()
+        .enumerate()
+        .map(|(a, s)| 1.0 / (s + k.w0(p.h[a])))
+        .collect()
+}
+
+/// Symmetrised kernel value and gradient (w.r.t. x_i) for a pair at distance r along dx.
+#[inline]
+pub fn symmetric_kernel<const D: usize>(
+    sys: &System<D>,
+    hi: f64,
+    hj: f64,
+    dx: &Vector<D>,
+    r: f64,
+) -> (f64, Vector<D>) {
+    let k = &sys.kernel;
+    let (ei, ej) = (k.eval(r, hi), k.eval(r, hj));
+    let w = 0.5 * (ei.w + ej.w);
+    let gw = if r > 0.0 {
+        dx * (0.5 * (ei.dwdr + ej.dwdr) / r)
+    } else {
+        Vector::zeros()
+    };
+    (w, gw)
+}
+
+#[derive(Clone, Copy)]
+struct Moments<const D: usize> {
+    m0: f64,
+    m1: Vector<D>,
+    m2: SMatrix<f64, D, D>,
+    dm0: Vector<D>,
+    /// dm1[(α, γ)] = ∂γ m1^α
+    dm1: SMatrix<f64, D, D>,
+    /// dm2[γ][(α, β)] = ∂γ m2^{αβ}
+    dm2: [SMatrix<f64, D, D>; D],
+}
+
+impl<const D: usize> Moments<D> {
+    fn zero() -> Self {
+        Self {
+            m0: 0.0,
+            m1: Vector::zeros(),
+            m2: SMatrix::zeros(),
+            dm0: Vector::zeros(),
+            dm1: SMatrix::zeros(),
+            dm2: [SMatrix::zeros(); D],
+        }
+    }
+
+    /// Add node j with volume v at separation x = x_i − x_j, symmetrised kernel w, gradient gw.
+    #[inline]
+    fn add(&mut self, v: f64, x: &Vector<D>, w: f64, gw: &Vector<D>) {
+        self.m0 += v * w;
+        self.m1 += x * (v * w);
+        self.m2 += x * x.transpose() * (v * w);
+        self.dm0 += gw * v;
+        self.dm1 += x * gw.transpose() * v + SMatrix::<f64, D, D>::identity() * (v * w);
+        for g in 0..D {
+            let mut e = Vector::<D>::zeros();
+            e[g] = 1.0;
+            self.dm2[g] +=
+                (x * x.transpose() * gw[g] + x * e.transpose() * w + e * x.transpose() * w) * v;
+        }
+    }
+
+    fn coefficients(&self, order: RkOrder) -> Option<RkCoefficients<D>> {
+        if order == RkOrder::Zeroth || D == 0 {
+            let a = 1.0 / self.m0;
+            return Some(RkCoefficients {
+                a,
+                b: Vector::zeros(),
+                grad_a: -self.dm0 * (a * a),
+                grad_b: SMatrix::zeros(),
+            });
+        }
+        let m = invert(&self.m2)?;
+        let b = -(m * self.m1);
+        let a = 1.0 / (self.m0 + b.dot(&self.m1));
+        let mut grad_a = Vector::<D>::zeros();
+        let mut grad_b = SMatrix::<f64, D, D>::zeros();
+        for g in 0..D {
+            let dm1_g: Vector<D> = self.dm1.column(g).into_owned();
+            grad_a[g] = -a * a * (self.dm0[g] + 2.0 * b.dot(&dm1_g) + b.dot(&(self.dm2[g] * b)));
+            let col = -(m * (dm1_g + self.dm2[g] * b));
+            for al in 0..D {
+                grad_b[(al, g)] = col[al];
+            }
+        }
+        Some(RkCoefficients {
+            a,
+            b,
+            grad_a,
+            grad_b,
+        })
+    }
+}
+
+/// Correction coefficients for every particle (volumes from [`volumes`]). A near-singular
+/// second moment (too few or one-sided neighbours) falls back to zeroth order, counted.
+pub fn coefficients<const D: usize>(
+    sys: &System<D>,
+    vol: &[f64],
+    order: RkOrder,
+) -> (Vec<RkCoefficients<D>>, u64) {
+    let n = sys.particles.len();
+    let p = &sys.particles;
+    let dom = &sys.domain;
+    let out: Vec<(RkCoefficients<D>, bool)> = (0..n)
+        .into_par_iter()
+        .with_min_len(64)
+        .map(|i| {
+            let mut mo = Moments::<D>::zero();
+            // self term: x_ii = 0, ∇W_ii = 0
+            mo.add(
+                vol[i],
+                &Vector::zeros(),
+                sys.kernel.w0(p.h[i]),
+                &Vector::zeros(),
+            );
+            for &e in sys.neighbours.of(i) {
+                let (j, code) = unpack(e);
+                let dx = dom.separation(&p.pos[i], &p.pos[j], code);
+                let r = dx.norm();
+                let (w, gw) = symmetric_kernel(sys, p.h[i], p.h[j], &dx, r);
+                mo.add(vol[j], &dx, w, &gw);
+            }
+            match mo.coefficients(order) {
+                Some(c) => (c, false),
+                None => (
+                    mo.coefficients(RkOrder::Zeroth).expect("zeroth order"),
+                    true,
+                ),
+            }
+        })
+        .collect();
+    let fallbacks = out.iter().filter(|o| o.1).count() as u64;
+    (out.into_iter().map(|o| o.0).collect(), fallbacks)
+}
