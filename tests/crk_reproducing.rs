@@ -77,12 +77,12 @@ fn a_b_at<const D: usize>(
 ) -> (f64, Vector<D>) {
     let p = &sim.sys.particles;
     let (mut m0, mut m1, mut m2) = (0.0, Vector::<D>::zeros(), SMatrix::<f64, D, D>::zeros());
-    for j in 0..p.len() {
-        let xij = sim.sys.domain.separation(x, &p.pos[j], 0);
-        let (w, _) = symmetric_kernel(&sim.sys, h_eval, p.h[j], &xij, xij.norm());
-        m0 += vol[j] * w;
-        m1 += xij * (vol[j] * w);
-        m2 += xij * xij.transpose() * (vol[j] * w);
+    for ((xj, &hj), &vj) in p.pos.iter().zip(&p.h).zip(vol) {
+        let xij = sim.sys.domain.separation(x, xj, 0);
+        let (w, _) = symmetric_kernel(&sim.sys, h_eval, hj, &xij, xij.norm());
+        m0 += vj * w;
+        m1 += xij * (vj * w);
+        m2 += xij * xij.transpose() * (vj * w);
     }
     let b = -(m2.try_inverse().unwrap() * m1);
     (1.0 / (m0 + b.dot(&m1)), b)
