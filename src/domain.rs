@@ -145,12 +145,4 @@ impl<const D: usize> Domain<D> {
             }
         }
     }
-
-    /// Longest search radius the box allows with minimum image (half the shortest periodic side).
-    pub fn max_periodic_reach(&self) -> f64 {
-        (0..D)
-            .filter(|&k| self.kind[k] == BoundaryKind::Periodic)
-            .map(|k| 0.5 * self.length(k))
-            .fold(f64::INFINITY, f64::min)
-    }
 }

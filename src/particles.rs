@@ -136,9 +136,4 @@ impl<const D: usize> Particles<D> {
             }
         }
     }
-
-    /// Total mass.
-    pub fn total_mass(&self) -> f64 {
-        self.mass.iter().sum()
-    }
 }

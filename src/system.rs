@@ -174,12 +174,6 @@ impl<const D: usize> System<D> {
         self.neighbours = NeighbourList::default();
     }
 
-    /// Forget the lists (after particles were added or removed).
-    pub fn invalidate_neighbours(&mut self) {
-        self.verlet = VerletList::default();
-        self.neighbours = NeighbourList::default();
-    }
-
     /// Scale every h by the expected compression over `dt` (continuity equation,
     /// dh/dt = (h/D) ∇·v) so the h iteration starts close to its answer.
     pub fn predict_h(&mut self, dt: f64) {

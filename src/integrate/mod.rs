@@ -26,8 +26,6 @@ pub enum IntegratorKind {
     CrkRk2,
 }
 
-pub const INTEGRATOR_NAMES: &str = "leapfrog, ssp-rk3, crk-rk2";
-
 /// Saved start-of-step state.
 #[derive(Debug, Clone, Default)]
 struct Saved<const D: usize> {
@@ -49,14 +47,6 @@ impl<const D: usize> Saved<D> {
 pub struct Integrator<const D: usize> {
     pub kind: IntegratorKind,
     saved: Saved<D>,
-}
-
-/// Evaluations per step (for cost accounting).
-pub fn evaluations_per_step(kind: IntegratorKind) -> u32 {
-    match kind {
-        IntegratorKind::Leapfrog | IntegratorKind::CrkRk2 => 1,
-        IntegratorKind::SspRk3 => 3,
-    }
 }
 
 /// U ← c0·U0 + c1·(U + dt·L(U)) on (x, v, u).

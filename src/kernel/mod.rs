@@ -70,9 +70,6 @@ pub enum KernelName {
     Qcm6,
 }
 
-pub const KERNEL_NAMES: &str =
-    "cubic-spline, quartic-spline, quintic-spline, septic-spline, wendland-c2, wendland-c4, wendland-c6, sinc, liq, qcm6";
-
 /// Runtime-chosen kernel. An enum rather than a trait object: the match is perfectly
 /// predicted inside a pair loop and lets the compiler inline each shape.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -53,9 +53,6 @@ pub enum SchemeConfig {
     RosswogF4(rosswog::RosswogOverrides),
 }
 
-/// Scheme names accepted in `scheme.name`.
-pub const SCHEME_NAMES: &str = "standard, rpsph, rosswog-f1, rosswog-f2, rosswog-f3, rosswog-f4";
-
 impl SchemeConfig {
     pub fn validate(&self) -> Result<(), String> {
         match self {

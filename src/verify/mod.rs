@@ -6,18 +6,6 @@ pub mod vortex;
 
 use riemann::{ExactRiemann, Primitive};
 
-/// L1 = mean |q_i − q_exact(x_i)| over the given samples (the peers' definition, peers.md §1.3).
-pub fn l1_error(samples: &[(f64, f64)], exact: impl Fn(f64) -> f64) -> f64 {
-    if samples.is_empty() {
-        return f64::NAN;
-    }
-    samples
-        .iter()
-        .map(|&(x, q)| (q - exact(x)).abs())
-        .sum::<f64>()
-        / samples.len() as f64
-}
-
 /// Errors of a 1D shock-tube profile against the exact Riemann solution.
 #[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct ShockTubeErrors {

@@ -188,8 +188,6 @@ pub struct Rosswog {
     preset: Preset,
     /// Slot holding ∇·v of the previous full step (shock trigger).
     prev_div_slot: usize,
-    /// Particles whose τ was near-singular in the latest evaluation.
-    pub ia_fallbacks: u64,
     first_step: bool,
 }
 
@@ -199,7 +197,6 @@ impl Rosswog {
             params,
             preset,
             prev_div_slot: usize::MAX,
-            ia_fallbacks: 0,
             first_step: true,
         }
     }
@@ -302,7 +299,6 @@ impl<const D: usize> Scheme<D> for Rosswog {
         let xw = self.density(sys);
         let t0 = std::time::Instant::now();
         let (mats, _grads, fallbacks) = gradients::ia_pass(sys);
-        self.ia_fallbacks = fallbacks;
         sys.stats.ia_fallbacks = fallbacks;
         sys.stats.ia_fallbacks_total += fallbacks;
         sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
@@ -394,6 +390,11 @@ impl<const D: usize> Scheme<D> for Rosswog {
             (o.dv / m + o.dv_diss, du, o.vsig)
         });
         Ok(())
+    }
+
+    /// After a predictor-corrector's final update: the same volume elements as `evaluate`.
+    fn refresh(&mut self, sys: &mut System<D>) {
+        self.density(sys);
     }
 
     fn end_step(&mut self, sys: &mut System<D>, dt: f64) {
