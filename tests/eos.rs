@@ -1,0 +1,81 @@
+//! Equations of state: closed forms, inverses and range checks.
+
+use sphfmu::eos::{Eos, EosConfig};
+
+#[test]
+fn ideal_gas_and_stiffened_gas_invert_and_give_the_sound_speed() {
+    let ideal = EosConfig::IdealGas { gamma: 1.4 };
+    let stiff = EosConfig::StiffenedGas {
+        gamma: 4.4,
+        p_inf: 6e8,
+    };
+    for eos in [ideal, stiff] {
+        for (rho, p) in [(1.0, 1.0), (0.125, 0.1), (1000.0, 1e5)] {
+            let u = eos.internal_energy(rho, p);
+            assert!(
+                (eos.pressure(rho, u) - p).abs() <= 1e-9 * p.abs().max(1.0),
+                "{eos:?}"
+            );
+            let g = eos.gamma();
+            let p_inf = if let EosConfig::StiffenedGas { p_inf, .. } = eos {
+                p_inf
+            } else {
+                0.0
+            };
+            let c = eos.sound_speed(rho, u);
+            assert!(
+                (c * c - g * (p + p_inf) / rho).abs() <= 1e-9 * c * c,
+                "{eos:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn tait_is_background_pressure_at_rest_density_and_stiff_around_it() {
+    let eos = EosConfig::Tait {
+        rho0: 1000.0,
+        sound_speed: 20.0,
+        gamma: 7.0,
+        background_pressure: 0.0,
+    };
+    assert_eq!(eos.pressure(1000.0, 0.0), 0.0);
+    assert_eq!(eos.sound_speed(1000.0, 0.0), 20.0);
+    // dP/dρ at ρ0 is c0²
+    let d = 1e-3;
+    let dpdrho = (eos.pressure(1000.0 + d, 0.0) - eos.pressure(1000.0 - d, 0.0)) / (2.0 * d);
+    assert!((dpdrho - 400.0).abs() < 1e-6, "{dpdrho}");
+    let iso = EosConfig::Isothermal { sound_speed: 3.0 };
+    assert_eq!(iso.pressure(2.0, 123.0), 18.0);
+}
+
+#[test]
+fn out_of_range_parameters_name_the_key() {
+    for (eos, key) in [
+        (EosConfig::IdealGas { gamma: 1.0 }, "eos.gamma"),
+        (EosConfig::IdealGas { gamma: f64::NAN }, "eos.gamma"),
+        (
+            EosConfig::Isothermal { sound_speed: -1.0 },
+            "eos.sound_speed",
+        ),
+        (
+            EosConfig::Tait {
+                rho0: 0.0,
+                sound_speed: 1.0,
+                gamma: 7.0,
+                background_pressure: 0.0,
+            },
+            "eos.rho0",
+        ),
+        (
+            EosConfig::StiffenedGas {
+                gamma: 4.4,
+                p_inf: -1.0,
+            },
+            "eos.p_inf",
+        ),
+    ] {
+        let e = eos.validate().unwrap_err();
+        assert!(e.starts_with(key), "{e}");
+    }
+}
