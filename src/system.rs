@@ -96,9 +96,10 @@ impl<const D: usize> Default for VerletList<D> {
 impl<const D: usize> System<D> {
     /// Make the master (Verlet) list valid for the current positions and return, per
     /// particle, the largest h it can serve exactly. The list holds every pair closer than
-    /// `max(Rb_a, Rb_b)` at build time (Rb = build reach); since then each particle moved at
-    /// most δ, so any pair closer than `max(R_a, R_b)` now is listed if `R_a + 2δ ≤ Rb_a` for
-    /// all a. The list is rebuilt (reach 2h(1+skin)) when `rebuild` is set or no slack is left.
+    /// `max(Rb_a, Rb_b)` at build time (Rb = build reach); since then particle a moved δ_a ≤
+    /// δ_max, so any pair closer than `max(R_a, R_b)` now is listed if
+    /// `R_a + δ_a + δ_max ≤ Rb_a` for all a. The list is rebuilt (reach 2h(1+skin)) when
+    /// `rebuild` is set or no slack is left.
     pub fn prepare_master_list(&mut self, skin: f64, mut rebuild: bool) -> Vec<f64> {
         let t0 = std::time::Instant::now();
         let n = self.particles.len();
@@ -106,20 +107,23 @@ impl<const D: usize> System<D> {
         if v.pos.len() != n || v.list.offsets.len() != n + 1 {
             rebuild = true;
         }
+        // Displacement of each particle since the build, and the largest one.
+        let mut disp = vec![0.0; n];
         let mut delta = 0.0;
         if !rebuild {
             let dom = &self.domain;
             let pos = &self.particles.pos;
-            delta = (0..n)
+            disp = (0..n)
                 .into_par_iter()
                 .map(|i| dom.separation(&pos[i], &v.pos[i], 0).norm())
-                .reduce(|| 0.0, f64::max);
+                .collect();
+            delta = disp.iter().cloned().fold(0.0, f64::max);
             let k = &self.kernel;
             let h = &self.particles.h;
             // Rebuild when some particle's current support already lacks slack.
             rebuild = (0..n)
                 .into_par_iter()
-                .any(|i| k.radius(h[i]) + 2.0 * delta > v.reach[i]);
+                .any(|i| k.radius(h[i]) + disp[i] + delta > v.reach[i]);
         }
         if rebuild {
             let tb = std::time::Instant::now();
@@ -132,13 +136,17 @@ impl<const D: usize> System<D> {
             v.list = NeighbourList::build(&p.pos, &v.reach, &self.domain, &self.grid);
             v.pos.clone_from(&p.pos);
             v.builds += 1;
+            disp.iter_mut().for_each(|d| *d = 0.0);
             delta = 0.0;
             self.stats.seconds_list_builds += tb.elapsed().as_secs_f64();
         }
         self.stats.seconds_neighbours += t0.elapsed().as_secs_f64();
+        // A pair closer than max(R_a, R_b) now, say R_a ≥ R_b, was closer than
+        // R_a + δ_a + δ_b ≤ R_a + δ_a + δ_max at the build: listed while R_a + δ_a + δ_max ≤ Rb_a.
         v.reach
             .iter()
-            .map(|&r| (r - 2.0 * delta) / crate::kernel::SUPPORT)
+            .zip(&disp)
+            .map(|(&r, &d)| (r - d - delta) / crate::kernel::SUPPORT)
             .collect()
     }
 
