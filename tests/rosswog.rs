@@ -220,3 +220,41 @@ fn gresho_f1_converges_f4_does_not() {
         "F1 should be far more accurate than F4: {f1:?} vs {f4:?}"
     );
 }
+
+#[test]
+fn singular_ia_matrix_falls_back_to_the_kernel_gradient_without_nan() {
+    // One row of particles in 2D: τ has no y extent, so every particle's IA matrix is singular.
+    let text = r#"
+[case]
+name = "row"
+dimension = 2
+[domain]
+min = [0.0, 0.0]
+max = [1.0, 1.0]
+boundary = ["periodic", "open"]
+[eos]
+type = "ideal-gas"
+gamma = 1.4
+[scheme]
+name = "rosswog-f1"
+[time]
+t_end = 1.0
+[[region]]
+min = [0.0, 0.49]
+max = [1.0, 0.51]
+spacing = 0.02
+density = 1.0
+pressure = 1.0
+velocity = [0.0, 0.1]
+"#;
+    let mut sim = Case::parse(text).unwrap().build::<2>().unwrap();
+    let n = sim.sys.particles.len() as u64;
+    assert_eq!(n, 50);
+    assert_eq!(
+        sim.sys.stats.ia_fallbacks, n,
+        "every particle of a single row should fall back"
+    );
+    sim.step(f64::INFINITY).unwrap();
+    assert!(sim.sys.first_non_finite().is_none());
+    assert!(sim.sys.stats.ia_fallbacks_total >= n);
+}
