@@ -218,3 +218,37 @@ pub fn coefficients<const D: usize>(
     let fallbacks = out.iter().filter(|o| o.1).count() as u64;
     (out.into_iter().map(|o| o.0).collect(), fallbacks)
 }
+
+/// CRKSPH mass density (spec §3, eq 76): ρ_i = Σ_j m_ij V_j W^R_ij / Σ_j V_j² W^R_ij with
+/// m_ij = m_j for the same material and m_i across materials; sums include j = i. On a uniform
+/// lattice this gives exact piecewise-constant densities across a static material boundary.
+pub fn density<const D: usize>(
+    sys: &System<D>,
+    vol: &[f64],
+    coef: &[RkCoefficients<D>],
+) -> Vec<f64> {
+    let p = &sys.particles;
+    let n = p.len();
+    let mut sums = vec![(0.0, 0.0); n];
+    sys.gather(&mut sums, |i, s, pr| {
+        let j = pr.b;
+        let (w, gw) = symmetric_kernel(sys, p.h[i], p.h[j], &pr.dx, pr.r);
+        let (wr, _) = coef[i].corrected(&pr.dx, w, &gw);
+        let mij = if p.material[i] == p.material[j] {
+            p.mass[j]
+        } else {
+            p.mass[i]
+        };
+        s.0 += mij * vol[j] * wr;
+        s.1 += vol[j] * vol[j] * wr;
+    });
+    (0..n)
+        .map(|i| {
+            let (wr0, _) =
+                coef[i].corrected(&Vector::zeros(), sys.kernel.w0(p.h[i]), &Vector::zeros());
+            let num = sums[i].0 + p.mass[i] * vol[i] * wr0;
+            let den = sums[i].1 + vol[i] * vol[i] * wr0;
+            num / den
+        })
+        .collect()
+}
