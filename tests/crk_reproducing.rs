@@ -170,3 +170,45 @@ fn density_is_exact_across_a_static_material_boundary() {
         "summation density should smear the jump: {sph:e}"
     );
 }
+
+#[test]
+fn pressure_force_is_exact_for_a_linear_pressure_and_conserves_momentum() {
+    use sphfmu::scheme::crksph::forces::pressure_acceleration;
+    // 1D uniform lattice with ρ = 1 and P = 1 + x: a = −∇P/ρ = −1 exactly away from the open
+    // ends (spec §4.2 consistency check).
+    let text = format!(
+        "{}[kernel]\nname = \"septic-spline\"\neta = 2.0\n[time]\nt_end = 1.0\n[[region]]\nspacing = 0.01\ndensity = 1.0\npressure = 1.0\n",
+        common::header(1, 0.0, 1.0, "open", 1.4)
+    );
+    let mut sim = Case::parse(&text).unwrap().build::<1>().unwrap();
+    sim.sys.particles.h.iter_mut().for_each(|h| *h = 0.02);
+    sim.sys.prepare_master_list(0.15, true);
+    sim.sys.compact_neighbours();
+    let vol = volumes(&sim.sys);
+    let (coef, _) = coefficients(&sim.sys, &vol, RkOrder::Linear);
+    let pr: Vec<f64> = sim.sys.particles.pos.iter().map(|x| 1.0 + x[0]).collect();
+    let acc = pressure_acceleration(&sim.sys, &vol, &coef, &pr);
+    let interior = (0..acc.len()).filter(|&i| (0.1..0.9).contains(&sim.sys.particles.pos[i][0]));
+    let err = interior
+        .map(|i| (acc[i][0] + 1.0).abs())
+        .fold(0.0, f64::max);
+    println!("1D lattice, P = 1 + x: max |a + 1| in the interior {err:.1e}");
+    assert!(err < 1e-10, "{err:e}");
+
+    // Jittered 2D periodic box with random pressures: Σ m a = 0 to round-off.
+    let sim = jittered::<2>();
+    let vol = volumes(&sim.sys);
+    let (coef, _) = coefficients(&sim.sys, &vol, RkOrder::Linear);
+    let pr: Vec<f64> = (0..sim.sys.particles.len())
+        .map(|i| 1.0 + ((i * 7919) % 101) as f64 / 101.0)
+        .collect();
+    let acc = pressure_acceleration(&sim.sys, &vol, &coef, &pr);
+    let p = &sim.sys.particles;
+    let net = (0..p.len()).fold(Vector::<2>::zeros(), |s, i| s + acc[i] * p.mass[i]);
+    let scale: f64 = (0..p.len()).map(|i| (acc[i] * p.mass[i]).norm()).sum();
+    println!(
+        "2D jittered, random P: |Σ m a| / Σ |m a| = {:.1e}",
+        net.norm() / scale
+    );
+    assert!(net.norm() < 1e-13 * scale, "{:e}", net.norm() / scale);
+}

@@ -2,4 +2,5 @@
 //! kernel machinery (§2); the evolution equations, compatible energy and limited viscosity
 //! (§3–7) build on it.
 
+pub mod forces;
 pub mod reproducing;
