@@ -212,3 +212,69 @@ fn pressure_force_is_exact_for_a_linear_pressure_and_conserves_momentum() {
     );
     assert!(net.norm() < 1e-13 * scale, "{:e}", net.norm() / scale);
 }
+
+#[test]
+fn limited_viscosity_vanishes_for_linear_velocity_fields_including_shear() {
+    use sphfmu::scheme::crksph::viscosity::{pair_q, velocity_gradients, ViscosityParams};
+    // Perfect 2D lattice (pairs no closer than Δx, so the closeness factor is 1), W7, h = 2Δx.
+    let text = format!(
+        "{}[kernel]\nname = \"septic-spline\"\neta = 2.0\n[time]\nt_end = 1.0\n[[region]]\nspacing = 0.0625\ndensity = 1.0\npressure = 1.0\n",
+        common::header(2, 0.0, 1.0, "open", 1.4)
+    );
+    let mut sim = Case::parse(&text).unwrap().build::<2>().unwrap();
+    sim.sys.particles.h.iter_mut().for_each(|h| *h = 0.125);
+    sim.sys.prepare_master_list(0.15, true);
+    sim.sys.compact_neighbours();
+    let vol = volumes(&sim.sys);
+    let (coef, _) = coefficients(&sim.sys, &vol, RkOrder::Linear);
+    let prm = ViscosityParams::default();
+    for (name, m) in [
+        ("compression", [[-1.0, 0.0], [0.0, -0.5]]),
+        ("shear", [[0.0, 1.0], [0.0, 0.0]]),
+        ("rotation+compression", [[-0.3, -1.0], [1.0, -0.2]]),
+    ] {
+        let a = SMatrix::<f64, 2, 2>::new(m[0][0], m[0][1], m[1][0], m[1][1]);
+        for (x, v) in sim
+            .sys
+            .particles
+            .pos
+            .iter()
+            .zip(sim.sys.particles.vel.iter_mut())
+        {
+            *v = a * x;
+        }
+        let grads = velocity_gradients(&sim.sys, &vol, &coef);
+        let p = &sim.sys.particles;
+        let (mut qmax, mut qmax_unlimited, mut gerr) = (0.0f64, 0.0f64, 0.0f64);
+        for i in 0..p.len() {
+            let interior = p.pos[i].iter().all(|&c| (0.3..0.7).contains(&c));
+            if interior {
+                gerr = gerr.max((grads[i] - a).norm());
+            }
+            for &e in sim.sys.neighbours.of(i) {
+                let (j, _) = sphfmu::neighbours::unpack(e);
+                if !(interior && p.pos[j].iter().all(|&c| (0.3..0.7).contains(&c))) {
+                    continue;
+                }
+                let dx = p.pos[i] - p.pos[j];
+                let vij = p.vel[i] - p.vel[j];
+                let side = |k: usize| (p.h[k], p.rho[k], 1.0);
+                let (qi, qj) = pair_q(&prm, &dx, &vij, &grads[i], &grads[j], side(i), side(j));
+                qmax = qmax.max(qi.abs()).max(qj.abs());
+                let un = ViscosityParams {
+                    limiter: false,
+                    ..prm
+                };
+                let (ui, uj) = pair_q(&un, &dx, &vij, &grads[i], &grads[j], side(i), side(j));
+                qmax_unlimited = qmax_unlimited.max(ui.abs()).max(uj.abs());
+            }
+        }
+        println!("{name}: |∇v − A| {gerr:.1e}, max |Q| limited {qmax:.1e}, unlimited {qmax_unlimited:.1e}");
+        assert!(gerr < 1e-12, "{name}: RK velocity gradient {gerr:e}");
+        assert!(qmax < 1e-12, "{name}: limited Q = {qmax:e}");
+        assert!(
+            qmax_unlimited > 1e-3,
+            "{name}: the unlimited viscosity should fire"
+        );
+    }
+}

@@ -4,3 +4,4 @@
 
 pub mod forces;
 pub mod reproducing;
+pub mod viscosity;
