@@ -173,6 +173,11 @@ impl<const D: usize> Simulation<D> {
     /// One step of at most `dt_cap`. Returns the step taken.
     pub fn step(&mut self, dt_cap: f64) -> Result<f64, SolverError> {
         let stable = self.stable_dt();
+        self.step_with(stable, dt_cap)
+    }
+
+    /// [`Self::step`] with the stability limit already computed.
+    fn step_with(&mut self, stable: f64, dt_cap: f64) -> Result<f64, SolverError> {
         let mut dt = stable.min(dt_cap);
         if !(dt.is_finite()) {
             dt = dt_cap;
@@ -221,7 +226,7 @@ impl<const D: usize> Simulation<D> {
             } else {
                 remaining
             };
-            self.step(cap)?;
+            self.step_with(stable, cap)?;
             if (t - self.time).abs() <= 1e-12 * t.abs().max(1.0) {
                 self.time = t;
             }

@@ -311,48 +311,24 @@ impl NeighbourList {
         }
         rev.par_sort_unstable();
         // Merge: each particle's gather entries followed by its handed-over entries.
-        let parts: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(CHUNK))
-            .into_par_iter()
-            .map(|chunk| {
-                let (start, end) = (chunk * CHUNK, ((chunk + 1) * CHUNK).min(n));
-                let mut j = rev.partition_point(|&(t, _)| (t as usize) < start);
-                let mut counts = Vec::with_capacity(end - start);
-                let mut out = Vec::new();
-                for a in start..end {
-                    let before = out.len();
-                    out.extend_from_slice(list.of(a));
-                    while j < rev.len() && rev[j].0 as usize == a {
-                        out.push(rev[j].1);
-                        j += 1;
-                    }
-                    counts.push((out.len() - before) as u32);
-                }
-                (counts, out)
-            })
-            .collect();
-        Self::concat(n, parts)
+        Self::from_rows(n, |a, out| {
+            out.extend_from_slice(list.of(a));
+            let first = rev.partition_point(|&(t, _)| (t as usize) < a);
+            out.extend(
+                rev[first..]
+                    .iter()
+                    .take_while(|&&(t, _)| t as usize == a)
+                    .map(|&(_, e)| e),
+            );
+        })
     }
 
     /// A copy holding only the entries for which `keep(a, entry)` holds (used to drop the
     /// skin once smoothing lengths have converged). Chunked in parallel.
     pub fn filtered(&self, keep: impl Fn(usize, u32) -> bool + Sync) -> Self {
-        let n = self.offsets.len() - 1;
-        const CHUNK: usize = 1024;
-        let parts: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(CHUNK))
-            .into_par_iter()
-            .map(|chunk| {
-                let (start, end) = (chunk * CHUNK, ((chunk + 1) * CHUNK).min(n));
-                let mut counts = Vec::with_capacity(end - start);
-                let mut out = Vec::with_capacity(self.offsets[end] - self.offsets[start]);
-                for a in start..end {
-                    let before = out.len();
-                    out.extend(self.of(a).iter().copied().filter(|&e| keep(a, e)));
-                    counts.push((out.len() - before) as u32);
-                }
-                (counts, out)
-            })
-            .collect();
-        Self::concat(n, parts)
+        Self::from_rows(self.offsets.len() - 1, |a, out| {
+            out.extend(self.of(a).iter().copied().filter(|&e| keep(a, e)))
+        })
     }
 
     /// The same lists after the particles were reordered so that new index i is old index
@@ -363,6 +339,17 @@ impl NeighbourList {
         for (new, &old) in perm.iter().enumerate() {
             inv[old as usize] = new as u32;
         }
+        Self::from_rows(n, |i, out| {
+            out.extend(self.of(perm[i] as usize).iter().map(|&e| {
+                let (b, code) = unpack(e);
+                pack(inv[b] as usize, code)
+            }))
+        })
+    }
+
+    /// Lists for n particles whose row a is written by `fill(a, out)` (appending to `out`),
+    /// built in parallel chunks of rows and joined in order.
+    fn from_rows(n: usize, fill: impl Fn(usize, &mut Vec<u32>) + Sync) -> Self {
         const CHUNK: usize = 1024;
         let parts: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
@@ -370,13 +357,10 @@ impl NeighbourList {
                 let (start, end) = (chunk * CHUNK, ((chunk + 1) * CHUNK).min(n));
                 let mut counts = Vec::with_capacity(end - start);
                 let mut out = Vec::new();
-                for &old in &perm[start..end] {
-                    let row = self.of(old as usize);
-                    out.extend(row.iter().map(|&e| {
-                        let (b, code) = unpack(e);
-                        pack(inv[b] as usize, code)
-                    }));
-                    counts.push(row.len() as u32);
+                for a in start..end {
+                    let before = out.len();
+                    fill(a, &mut out);
+                    counts.push((out.len() - before) as u32);
                 }
                 (counts, out)
             })
