@@ -82,6 +82,21 @@ impl EosConfig {
     }
 }
 
+impl EosConfig {
+    /// Entropy proxy s = (P + P∞)/ρ^γ for the compatible energy split's weights (CRKSPH spec
+    /// §5, eqs 62–63); `None` for the barotropic laws, whose split is then even (f = ½).
+    #[inline]
+    pub fn entropy_proxy(&self, rho: f64, u: f64) -> Option<f64> {
+        match *self {
+            EosConfig::IdealGas { gamma } => Some((gamma - 1.0) * u * rho.powf(1.0 - gamma)),
+            EosConfig::StiffenedGas { gamma, .. } => {
+                Some((gamma - 1.0) * u * rho.powf(1.0 - gamma))
+            }
+            EosConfig::Isothermal { .. } | EosConfig::Tait { .. } => None,
+        }
+    }
+}
+
 impl Eos for EosConfig {
     #[inline]
     fn pressure(&self, rho: f64, u: f64) -> f64 {

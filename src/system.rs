@@ -237,6 +237,44 @@ impl<const D: usize> System<D> {
             });
     }
 
+    /// [`Self::gather`] with one output slot per listed pair as well (in list order), for
+    /// schemes that keep pair forces (the compatible energy update, CRKSPH spec §5).
+    pub fn gather_pairs<T: Send, Q: Send, F>(&self, out: &mut [T], per_pair: &mut [Q], f: F)
+    where
+        F: Fn(usize, &mut T, &mut Q, &Pair<D>) + Sync,
+    {
+        let nb = &self.neighbours;
+        assert_eq!(per_pair.len(), nb.total_pairs(), "one slot per listed pair");
+        let mut slices: Vec<&mut [Q]> = Vec::with_capacity(out.len());
+        let mut rest = per_pair;
+        for a in 0..out.len() {
+            let (head, tail) = rest.split_at_mut(nb.of(a).len());
+            slices.push(head);
+            rest = tail;
+        }
+        let dom = &self.domain;
+        let p = &self.particles;
+        out.par_iter_mut()
+            .zip(slices.into_par_iter())
+            .enumerate()
+            .with_min_len(64)
+            .for_each(|(a, (acc, slots))| {
+                let xa = p.pos[a];
+                for (&e, slot) in nb.of(a).iter().zip(slots.iter_mut()) {
+                    let (b, code) = unpack(e);
+                    let dx = dom.separation(&xa, &p.pos[b], code);
+                    let pair = Pair {
+                        b,
+                        code,
+                        dx,
+                        r: dx.norm(),
+                        vb: dom.image_velocity(&p.vel[b], code),
+                    };
+                    f(a, acc, slot, &pair);
+                }
+            });
+    }
+
     /// End of a force pass: record its timing and pair count, and write per particle
     /// dv/dt (plus gravity), du/dt and the signal speed (at least c_s) from `derivs(a)`.
     pub fn store_derivatives(

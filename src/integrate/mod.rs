@@ -7,13 +7,15 @@
 //!   §7.3), three evaluations per step.
 //! * `crk-rk2` — the one-evaluation "cheap synchronous" RK2 of the CRKSPH spec §7.1:
 //!   predict to t+dt/2 with the previous midpoint derivatives, evaluate there, advance the
-//!   full step from the start state, then refresh ρ, h, P.
+//!   full step from the start state, then refresh ρ, h, P. When the scheme keeps its pair
+//!   accelerations ([`Scheme::pair_work`]) the final u comes from the compatible update
+//!   (CRKSPH spec §5) with the midpoint a_ij and v^{1/2} = (v⁰ + v¹)/2; otherwise from du/dt.
 //!
 //! Positions are wrapped / reflected only at the end of a full step, so the stage
 //! combinations never mix a wrapped and an unwrapped coordinate.
 
 use crate::particles::Vector;
-use crate::scheme::{Scheme, SchemeError};
+use crate::scheme::{compatible, Scheme, SchemeError};
 use crate::system::System;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -32,6 +34,8 @@ struct Saved<const D: usize> {
     pos: Vec<Vector<D>>,
     vel: Vec<Vector<D>>,
     u: Vec<f64>,
+    /// Start-of-step entropy proxies (compatible energy update only).
+    entropy: Vec<Option<f64>>,
 }
 
 impl<const D: usize> Saved<D> {
@@ -40,6 +44,15 @@ impl<const D: usize> Saved<D> {
         self.pos.clone_from(&p.pos);
         self.vel.clone_from(&p.vel);
         self.u.clone_from(&p.u);
+    }
+
+    fn save_entropy(&mut self, sys: &System<D>) {
+        let p = &sys.particles;
+        let eos = sys.eos;
+        self.entropy = (0..p.len())
+            .into_par_iter()
+            .map(|i| eos.entropy_proxy(p.rho[i], p.u[i]))
+            .collect();
     }
 }
 
@@ -171,6 +184,9 @@ impl<const D: usize> Integrator<D> {
             IntegratorKind::CrkRk2 => {
                 let mut s0 = std::mem::take(&mut self.saved);
                 s0.save(sys);
+                if scheme.pair_work().is_some() {
+                    s0.save_entropy(sys);
+                }
                 // predictor to the midpoint with the previous (midpoint) derivatives
                 combine(sys, &s0, 0.0, 1.0, 0.5 * dt);
                 sys.predict_h(dt);
@@ -190,6 +206,15 @@ impl<const D: usize> Integrator<D> {
                             *v = s0.vel[i] + acc[i] * dt;
                             *u = s0.u[i] + dudt[i] * dt;
                         });
+                }
+                if let Some(work) = scheme.pair_work() {
+                    let p = &sys.particles;
+                    let v_half: Vec<Vector<D>> = (0..p.len())
+                        .into_par_iter()
+                        .map(|i| (s0.vel[i] + p.vel[i]) * 0.5)
+                        .collect();
+                    let u1 = compatible::thermal_update(sys, work, &v_half, &s0.entropy, &s0.u, dt);
+                    sys.particles.u = u1;
                 }
                 enforce_boundaries(sys);
                 sys.predict_h(0.5 * dt);

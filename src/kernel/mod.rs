@@ -16,11 +16,13 @@
 
 mod bspline;
 mod peaked;
+mod psph;
 mod sinc;
 mod wendland;
 
 pub use bspline::{CubicSplineM4, QuarticSplineM5, QuinticSplineM6, SepticSplineW7};
 pub use peaked::{LinearQuartic, QuarticCoreM6};
+pub use psph::PsphQuintic;
 pub use sinc::SincKernel;
 pub use wendland::{WendlandC2, WendlandC4, WendlandC6};
 
@@ -68,6 +70,8 @@ pub enum KernelName {
     Liq,
     /// M6 with a quartic core and non-zero central slope, for comparison only.
     Qcm6,
+    /// The PSPH quintic of Hopkins (2015), CRKSPH spec eq G.13.
+    PsphQuintic,
 }
 
 /// Runtime-chosen kernel. An enum rather than a trait object: the match is perfectly
@@ -84,6 +88,7 @@ pub enum AnyKernel {
     Sinc(SincKernel),
     Liq(LinearQuartic),
     Qcm6(QuarticCoreM6),
+    Psph(PsphQuintic),
 }
 
 impl AnyKernel {
@@ -100,7 +105,21 @@ impl AnyKernel {
             KernelName::Sinc => AnyKernel::Sinc(SincKernel::new(sinc_n)?),
             KernelName::Liq => AnyKernel::Liq(LinearQuartic),
             KernelName::Qcm6 => AnyKernel::Qcm6(QuarticCoreM6),
+            KernelName::PsphQuintic => AnyKernel::Psph(PsphQuintic),
         })
+    }
+
+    /// Support in the kernel's native units of h (CRKSPH spec Table D.1's η_max): the
+    /// B-splines W_k have (k+1)/2, Wendland and the PSPH quintic 1. CRKSPH and compSPH measure
+    /// their viscosity's η = |x_ij|/h in these units.
+    pub fn native_support(&self) -> f64 {
+        match self {
+            AnyKernel::M4(_) | AnyKernel::Sinc(_) | AnyKernel::Liq(_) => 2.0,
+            AnyKernel::M5(_) => 2.5,
+            AnyKernel::M6(_) | AnyKernel::Qcm6(_) => 3.0,
+            AnyKernel::W7(_) => 4.0,
+            AnyKernel::C2(_) | AnyKernel::C4(_) | AnyKernel::C6(_) | AnyKernel::Psph(_) => 1.0,
+        }
     }
 
     /// Display name (for tables).
@@ -124,6 +143,7 @@ impl AnyKernel {
         }
         v.push(AnyKernel::Liq(LinearQuartic));
         v.push(AnyKernel::Qcm6(QuarticCoreM6));
+        v.push(AnyKernel::Psph(PsphQuintic));
         v
     }
 }
@@ -141,6 +161,7 @@ macro_rules! dispatch {
             AnyKernel::Sinc($k) => $e,
             AnyKernel::Liq($k) => $e,
             AnyKernel::Qcm6($k) => $e,
+            AnyKernel::Psph($k) => $e,
         }
     };
 }

@@ -1,7 +1,264 @@
-//! CRKSPH (Frontiere, Raskin & Owen 2017; spec `crksph.md`). This module holds the reproducing
-//! kernel machinery (§2); the evolution equations, compatible energy and limited viscosity
-//! (§3–7) build on it.
+//! CRKSPH (Frontiere, Raskin & Owen 2017; spec `crksph.md`): linear reproducing kernels (§2),
+//! mass-over-volume density (§3, eq 76), the antisymmetrised momentum equation (§4.2, eq 64),
+//! the thermal-energy derivative (§4.3, eq 78) for interim values, the compatible energy update
+//! (§5, see [`crate::scheme::compatible`]) for the final one, and the limited viscosity (§6).
+//!
+//! Decisions for the spec's open points (§11), made here and nowhere else:
+//! * h (§7.3, item 8): the number-density form of the "simple, robust substitute",
+//!   h_i = η V_i^{1/ν} with V_i = 1/Σ_j W(x_ij, h_i) (eq 75) solved by the Newton iteration of
+//!   [`smoothing`] with weights X = 1. Like IdealH it depends on the point distribution only,
+//!   not on masses, so an equally spaced multi-material lattice keeps one h (spec §9.3).
+//! * ρ: eq 76 at every evaluation (midpoint and end of step); no continuity equation (eq 79).
+//! * Integrator (item 7): `crk-rk2`, Spheral's CheapSynchronousRK2 (spec §7.1), CFL 0.25.
+//! * Time step (§7.2): the scheme writes v_sig = η·max(c, √(Q_max/ρ), approach speed) and
+//!   h|∇·v|, so the driver's C·h/v_sig is C·l/max(...) with the nodal spacing l = h/η.
+//! * η_fold (item 9): the paper's 0.2; Q_j in the energy equation as printed (eq 78), not
+//!   Spheral's ½(Q_i + Q_j).
+//! * No XSPH (item 17).
 
 pub mod forces;
 pub mod reproducing;
 pub mod viscosity;
+
+use super::compatible::PairWork;
+use super::rosswog::gradients::reflect;
+use super::standard::{check_range, curl_norm};
+use super::{smoothing, Scheme, SchemeError};
+use crate::particles::Vector;
+use crate::system::System;
+use reproducing::{coefficients, density, symmetric_kernel, RkCoefficients, RkOrder};
+use serde::{Deserialize, Serialize};
+use viscosity::{pair_q, velocity_gradients, ViscosityParams};
+
+/// Reproducing order as written in case files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum OrderName {
+    Zeroth,
+    #[default]
+    Linear,
+}
+
+/// Parameters of `[scheme] name = "crksph"`. Unset viscosity constants follow the kernel
+/// (spec Table D.1): C_l = η_max/2, C_q = η_max/4 (W7: 2 and 1), η_crit = 1/n_h.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CrksphParams {
+    /// Linear viscosity coefficient C_l, [0, 10].
+    pub c_l: Option<f64>,
+    /// Quadratic viscosity coefficient C_q, [0, 10].
+    pub c_q: Option<f64>,
+    /// ε² in μ's denominator, (0, 1].
+    pub epsilon2: f64,
+    /// Limiter closeness scale η_fold, (0, 2].
+    pub eta_fold: f64,
+    /// Van Leer limiter on the velocity jump (off: plain Monaghan–Gingold).
+    pub limiter: bool,
+    /// Reproducing order: linear (the paper) or zeroth (B ≡ 0).
+    pub order: OrderName,
+    /// Final u from the compatible update (§5) rather than from du/dt (eq 78).
+    pub compatible_energy: bool,
+}
+
+impl Default for CrksphParams {
+    fn default() -> Self {
+        Self {
+            c_l: None,
+            c_q: None,
+            epsilon2: 1e-2,
+            eta_fold: 0.2,
+            limiter: true,
+            order: OrderName::Linear,
+            compatible_energy: true,
+        }
+    }
+}
+
+impl CrksphParams {
+    pub fn validate(&self) -> Result<(), String> {
+        if let Some(c) = self.c_l {
+            check_range("scheme.c_l", c, 0.0, 10.0)?;
+        }
+        if let Some(c) = self.c_q {
+            check_range("scheme.c_q", c, 0.0, 10.0)?;
+        }
+        if !(self.epsilon2 > 0.0 && self.epsilon2 <= 1.0) {
+            return Err(format!(
+                "scheme.epsilon2: must be in (0, 1], got {}",
+                self.epsilon2
+            ));
+        }
+        if !(self.eta_fold > 0.0 && self.eta_fold <= 2.0) {
+            return Err(format!(
+                "scheme.eta_fold: must be in (0, 2], got {}",
+                self.eta_fold
+            ));
+        }
+        Ok(())
+    }
+
+    /// Viscosity constants for a kernel of native support `eta_max` run at our η.
+    pub fn viscosity(&self, eta_max: f64, eta: f64) -> ViscosityParams {
+        // n_h = 2η/η_max (kernel module doc); η_crit = 1/n_h (spec §6)
+        let n_h = 2.0 * eta / eta_max;
+        ViscosityParams {
+            c_l: self.c_l.unwrap_or(0.5 * eta_max),
+            c_q: self.c_q.unwrap_or(0.25 * eta_max),
+            eps2: self.epsilon2,
+            eta_crit: 1.0 / n_h,
+            eta_fold: self.eta_fold,
+            native_support: eta_max,
+            limiter: self.limiter,
+        }
+    }
+}
+
+/// What the force pass accumulates per particle.
+#[derive(Clone, Copy)]
+struct CrkAcc<const D: usize> {
+    acc: Vector<D>,
+    dudt: f64,
+    q_max: f64,
+    approach: f64,
+}
+
+impl<const D: usize> Default for CrkAcc<D> {
+    fn default() -> Self {
+        Self {
+            acc: Vector::zeros(),
+            dudt: 0.0,
+            q_max: 0.0,
+            approach: 0.0,
+        }
+    }
+}
+
+pub struct Crksph<const D: usize> {
+    params: CrksphParams,
+    visc: ViscosityParams,
+    order: RkOrder,
+    work: PairWork<D>,
+    ones: Vec<f64>,
+}
+
+impl<const D: usize> Crksph<D> {
+    pub fn new(params: CrksphParams) -> Self {
+        Self {
+            params,
+            visc: ViscosityParams::default(),
+            order: match params.order {
+                OrderName::Linear => RkOrder::Linear,
+                OrderName::Zeroth => RkOrder::Zeroth,
+            },
+            work: PairWork::default(),
+            ones: vec![],
+        }
+    }
+
+    /// h and V (eq 75), the correction coefficients, ρ (eq 76) and the EOS (spec §7.4 steps 1–4).
+    fn state(&mut self, sys: &mut System<D>) -> (Vec<f64>, Vec<RkCoefficients<D>>) {
+        let n = sys.particles.len();
+        self.ones.resize(n, 1.0);
+        smoothing::solve_density_and_h_weighted(sys, Some(&self.ones), true);
+        let t0 = std::time::Instant::now();
+        // with X = 1 the solve leaves ρ = m Σ_j W(h_i), i.e. V = m/ρ
+        let p = &sys.particles;
+        let vol: Vec<f64> = (0..n).map(|i| p.mass[i] / p.rho[i]).collect();
+        let (coef, fallbacks) = coefficients(sys, &vol, self.order);
+        sys.stats.ia_fallbacks = fallbacks;
+        sys.stats.ia_fallbacks_total += fallbacks;
+        sys.particles.rho = density(sys, &vol, &coef);
+        sys.update_eos();
+        sys.stats.total_pairs += 2 * sys.neighbours.total_pairs() as u64;
+        sys.stats.seconds_density += t0.elapsed().as_secs_f64();
+        (vol, coef)
+    }
+}
+
+impl<const D: usize> Scheme<D> for Crksph<D> {
+    fn name(&self) -> &'static str {
+        "crksph"
+    }
+
+    fn init(&mut self, sys: &mut System<D>) {
+        self.visc = self
+            .params
+            .viscosity(sys.kernel.kernel.native_support(), sys.eta);
+    }
+
+    fn evaluate(&mut self, sys: &mut System<D>) -> Result<(), SchemeError> {
+        let (vol, coef) = self.state(sys);
+        let t0 = std::time::Instant::now();
+        let grads = velocity_gradients(sys, &vol, &coef);
+        {
+            let p = &mut sys.particles;
+            for (i, g) in grads.iter().enumerate() {
+                p.div_v[i] = g.trace();
+                p.curl_v[i] = curl_norm(g);
+            }
+        }
+        sys.stats.total_pairs += sys.neighbours.total_pairs() as u64;
+        sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
+
+        let t0 = std::time::Instant::now();
+        let n = sys.particles.len();
+        let mut out = vec![CrkAcc::<D>::default(); n];
+        let mut work = std::mem::take(&mut self.work);
+        work.reset(sys);
+        {
+            let p = &sys.particles;
+            let visc = &self.visc;
+            sys.gather_pairs(&mut out, &mut work.acc, |i, o, slot, pr| {
+                let j = pr.b;
+                let (w, gw) = symmetric_kernel(sys, p.h[i], p.h[j], &pr.dx, pr.r);
+                let cj = coef[j].reflected(pr.code);
+                let (_, gij) = coef[i].corrected(&pr.dx, w, &gw);
+                let (_, gji) = cj.corrected(&(-pr.dx), w, &(-gw));
+                let dg = gij - gji;
+                let vij = p.vel[i] - pr.vb;
+                let (qi, qj) = pair_q(
+                    visc,
+                    &pr.dx,
+                    &vij,
+                    &grads[i],
+                    &reflect(&grads[j], pr.code),
+                    (p.h[i], p.rho[i], p.sound_speed[i]),
+                    (p.h[j], p.rho[j], p.sound_speed[j]),
+                );
+                let vv = vol[i] * vol[j] / p.mass[i];
+                // eq 64 with P → P + Q; eq 78
+                let a_ij = dg * (-0.5 * vv * (p.pressure[i] + p.pressure[j] + qi + qj));
+                *slot = a_ij;
+                o.acc += a_ij;
+                o.dudt += 0.5 * vv * (p.pressure[j] + qj) * vij.dot(&dg);
+                // spec §7.2: Q_max = max 4 Q_i, approach speed max(0, (v_j − v_i)·x̂_ij)
+                o.q_max = o.q_max.max(4.0 * qi);
+                if pr.r > 0.0 {
+                    o.approach = o.approach.max(-vij.dot(&pr.dx) / pr.r);
+                }
+            });
+        }
+        self.work = work;
+        let eta = sys.eta;
+        let p = &sys.particles;
+        let vsig: Vec<f64> = (0..n)
+            .map(|i| {
+                let o = &out[i];
+                let s = p.sound_speed[i]
+                    .max((o.q_max.max(0.0) / p.rho[i]).sqrt())
+                    .max(o.approach);
+                (eta * s).max(p.h[i] * p.div_v[i].abs())
+            })
+            .collect();
+        sys.store_derivatives(t0, |i| (out[i].acc, out[i].dudt, vsig[i]));
+        Ok(())
+    }
+
+    fn refresh(&mut self, sys: &mut System<D>) {
+        self.state(sys);
+    }
+
+    fn pair_work(&self) -> Option<&PairWork<D>> {
+        self.params.compatible_energy.then_some(&self.work)
+    }
+}
