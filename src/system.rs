@@ -50,6 +50,8 @@ pub struct Pair<const D: usize> {
     pub r: f64,
     /// Velocity of b's image (normal components reversed for mirror images).
     pub vb: Vector<D>,
+    /// Position of this pair in the working list (for per-pair caches).
+    pub index: usize,
 }
 
 #[derive(Debug, Clone)]
@@ -221,7 +223,8 @@ impl<const D: usize> System<D> {
             .with_min_len(64)
             .for_each(|(a, acc)| {
                 let (xa, _) = kin(a);
-                for &e in nb.of(a) {
+                let first = nb.offsets[a];
+                for (k, &e) in nb.of(a).iter().enumerate() {
                     let (b, code) = unpack(e);
                     let (xb, vb) = kin(b);
                     let dx = dom.separation(&xa, &xb, code);
@@ -231,6 +234,7 @@ impl<const D: usize> System<D> {
                         dx,
                         r: dx.norm(),
                         vb: dom.image_velocity(&vb, code),
+                        index: first + k,
                     };
                     f(a, acc, &pair);
                 }
@@ -260,7 +264,8 @@ impl<const D: usize> System<D> {
             .with_min_len(64)
             .for_each(|(a, (acc, slots))| {
                 let xa = p.pos[a];
-                for (&e, slot) in nb.of(a).iter().zip(slots.iter_mut()) {
+                let first = nb.offsets[a];
+                for (k, (&e, slot)) in nb.of(a).iter().zip(slots.iter_mut()).enumerate() {
                     let (b, code) = unpack(e);
                     let dx = dom.separation(&xa, &p.pos[b], code);
                     let pair = Pair {
@@ -269,6 +274,7 @@ impl<const D: usize> System<D> {
                         dx,
                         r: dx.norm(),
                         vb: dom.image_velocity(&p.vel[b], code),
+                        index: first + k,
                     };
                     f(a, acc, slot, &pair);
                 }

@@ -6,7 +6,9 @@ mod common;
 use nalgebra::SMatrix;
 use sphfmu::case::Case;
 use sphfmu::particles::Vector;
-use sphfmu::scheme::crksph::reproducing::{coefficients, symmetric_kernel, volumes, RkOrder};
+use sphfmu::scheme::crksph::reproducing::{
+    coefficients, pair_kernels, symmetric_kernel, volumes, RkOrder,
+};
 use sphfmu::sim::Simulation;
 
 fn jittered<const D: usize>() -> Simulation<D> {
@@ -23,7 +25,8 @@ fn reproduction<const D: usize>() -> [f64; 4] {
     let sim = jittered::<D>();
     let sys = &sim.sys;
     let vol = volumes(sys);
-    let (coef, fallbacks) = coefficients(sys, &vol, RkOrder::Linear);
+    let kern = pair_kernels(sys);
+    let (coef, fallbacks) = coefficients(sys, &vol, &kern, RkOrder::Linear);
     assert_eq!(fallbacks, 0);
     let p = &sys.particles;
     let c: Vector<D> = Vector::from_fn(|k, _| 0.7 - 0.4 * k as f64);
@@ -92,7 +95,8 @@ fn a_b_at<const D: usize>(
 fn gradients_of_a_and_b_match_finite_differences() {
     let sim = jittered::<2>();
     let vol = volumes(&sim.sys);
-    let (coef, _) = coefficients(&sim.sys, &vol, RkOrder::Linear);
+    let kern = pair_kernels(&sim.sys);
+    let (coef, _) = coefficients(&sim.sys, &vol, &kern, RkOrder::Linear);
     let eps = 1e-6;
     let mut worst: f64 = 0.0;
     for i in (0..sim.sys.particles.len()).step_by(37) {
@@ -138,8 +142,9 @@ fn density_is_exact_across_a_static_material_boundary() {
     sim.sys.prepare_master_list(0.15, true);
     sim.sys.compact_neighbours();
     let vol = volumes(&sim.sys);
-    let (coef, _) = coefficients(&sim.sys, &vol, RkOrder::Linear);
-    let rho = sphfmu::scheme::crksph::reproducing::density(&sim.sys, &vol, &coef);
+    let kern = pair_kernels(&sim.sys);
+    let (coef, _) = coefficients(&sim.sys, &vol, &kern, RkOrder::Linear);
+    let rho = sphfmu::scheme::crksph::reproducing::density(&sim.sys, &vol, &coef, &kern);
     let p = &sim.sys.particles;
     let exact = |i: usize| if p.material[i] == 1 { 4.0 } else { 1.0 };
     let crk = (0..p.len())
@@ -185,9 +190,10 @@ fn pressure_force_is_exact_for_a_linear_pressure_and_conserves_momentum() {
     sim.sys.prepare_master_list(0.15, true);
     sim.sys.compact_neighbours();
     let vol = volumes(&sim.sys);
-    let (coef, _) = coefficients(&sim.sys, &vol, RkOrder::Linear);
+    let kern = pair_kernels(&sim.sys);
+    let (coef, _) = coefficients(&sim.sys, &vol, &kern, RkOrder::Linear);
     let pr: Vec<f64> = sim.sys.particles.pos.iter().map(|x| 1.0 + x[0]).collect();
-    let acc = pressure_acceleration(&sim.sys, &vol, &coef, &pr);
+    let acc = pressure_acceleration(&sim.sys, &vol, &coef, &kern, &pr);
     let interior = (0..acc.len()).filter(|&i| (0.1..0.9).contains(&sim.sys.particles.pos[i][0]));
     let err = interior
         .map(|i| (acc[i][0] + 1.0).abs())
@@ -198,11 +204,12 @@ fn pressure_force_is_exact_for_a_linear_pressure_and_conserves_momentum() {
     // Jittered 2D periodic box with random pressures: Σ m a = 0 to round-off.
     let sim = jittered::<2>();
     let vol = volumes(&sim.sys);
-    let (coef, _) = coefficients(&sim.sys, &vol, RkOrder::Linear);
+    let kern = pair_kernels(&sim.sys);
+    let (coef, _) = coefficients(&sim.sys, &vol, &kern, RkOrder::Linear);
     let pr: Vec<f64> = (0..sim.sys.particles.len())
         .map(|i| 1.0 + ((i * 7919) % 101) as f64 / 101.0)
         .collect();
-    let acc = pressure_acceleration(&sim.sys, &vol, &coef, &pr);
+    let acc = pressure_acceleration(&sim.sys, &vol, &coef, &kern, &pr);
     let p = &sim.sys.particles;
     let net = (0..p.len()).fold(Vector::<2>::zeros(), |s, i| s + acc[i] * p.mass[i]);
     let scale: f64 = (0..p.len()).map(|i| (acc[i] * p.mass[i]).norm()).sum();
@@ -226,7 +233,8 @@ fn limited_viscosity_vanishes_for_linear_velocity_fields_including_shear() {
     sim.sys.prepare_master_list(0.15, true);
     sim.sys.compact_neighbours();
     let vol = volumes(&sim.sys);
-    let (coef, _) = coefficients(&sim.sys, &vol, RkOrder::Linear);
+    let kern = pair_kernels(&sim.sys);
+    let (coef, _) = coefficients(&sim.sys, &vol, &kern, RkOrder::Linear);
     let prm = ViscosityParams::default();
     for (name, m) in [
         ("compression", [[-1.0, 0.0], [0.0, -0.5]]),
@@ -243,7 +251,7 @@ fn limited_viscosity_vanishes_for_linear_velocity_fields_including_shear() {
         {
             *v = a * x;
         }
-        let grads = velocity_gradients(&sim.sys, &vol, &coef);
+        let grads = velocity_gradients(&sim.sys, &vol, &coef, &kern);
         let p = &sim.sys.particles;
         let (mut qmax, mut qmax_unlimited, mut gerr) = (0.0f64, 0.0f64, 0.0f64);
         for i in 0..p.len() {

@@ -222,6 +222,13 @@ fn main() -> ExitCode {
                     if let Some(l1) = s.vortex_l1 {
                         println!("L1(v) against the stationary Gresho vortex: {l1:.4e}");
                     }
+                    if let Some(r) = s.radial {
+                        println!(
+                            "against the exact solution: shock at r = {:.4} (exact {:.4}), post-shock density {:.3} (exact {:.3}), L1(rho) {:.4e} ({} particles)",
+                            r.shock_radius, r.shock_radius_exact, r.post_shock_density,
+                            r.post_shock_density_exact, r.l1_density, r.particles
+                        );
+                    }
                     if let Some(p) = s.plot {
                         println!("profile plot: {}", p.display());
                     }

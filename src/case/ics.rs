@@ -264,6 +264,17 @@ pub fn generate_particles<const D: usize>(
     if let Some(g) = &case.glass {
         super::glass::relax(&mut p, domain, g, &spacing_of);
     }
+    if let Some(b) = &case.blast {
+        // the particle nearest the centre (the first of equals) takes the whole energy
+        let c = Vector::<D>::from_iterator(b.center.iter().cloned());
+        let nearest = (0..p.len())
+            .min_by(|&i, &j| {
+                let (di, dj) = ((p.pos[i] - c).norm(), (p.pos[j] - c).norm());
+                di.total_cmp(&dj)
+            })
+            .expect("particles exist");
+        p.u[nearest] += b.energy / p.mass[nearest];
+    }
     if let Some(pert) = &case.perturbation {
         let mut rng = SplitMix64::new(pert.seed);
         for (x, &spacing) in p.pos.iter_mut().zip(&spacing_of) {

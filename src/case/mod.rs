@@ -1,9 +1,11 @@
 //! Case files (`models/*.toml`): a scenario as data. Parsed with serde (unknown keys are
 //! errors), then validated range by range; every error names the key and the allowed range.
 
+mod checks;
 mod glass;
 mod ics;
 
+pub use checks::{Blast, Verify};
 pub use glass::GlassConfig;
 pub use ics::generate_particles;
 
@@ -63,24 +65,9 @@ pub struct Case {
     /// Exact solution to compare with after the run.
     #[serde(default)]
     pub verify: Option<Verify>,
-}
-
-/// `[verify]`: the exact solution to compare with after the run.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
-pub enum Verify {
-    /// A 1D Riemann problem along x (shock tubes), states as [ρ, v, P]; L1 of ρ, v, P and a
-    /// profile plot.
-    Riemann {
-        x0: f64,
-        left: [f64; 3],
-        right: [f64; 3],
-        /// Only particles with x in [x_min, x_max] enter the norms.
-        x_min: Option<f64>,
-        x_max: Option<f64>,
-    },
-    /// The Gresho–Chan vortex: L1 of the velocity (Rosswog Eq. 106).
-    Gresho(crate::verify::vortex::Gresho),
+    /// Point energy deposit (Sedov–Taylor blast).
+    #[serde(default)]
+    pub blast: Option<Blast>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -293,7 +280,7 @@ impl Case {
         self.case.dimension
     }
 
-    fn vec_len(&self, key: &str, v: &[f64]) -> Result<(), CaseError> {
+    pub(crate) fn vec_len(&self, key: &str, v: &[f64]) -> Result<(), CaseError> {
         let d = self.case.dimension;
         if v.len() != d {
             return Err(CaseError(format!(
@@ -469,27 +456,11 @@ impl Case {
         if let Some(g) = &self.glass {
             g.validate()?;
         }
-        if let Some(Verify::Gresho(g)) = &self.verify {
-            if self.case.dimension != 2 {
-                return Err(CaseError(
-                    "verify: the Gresho vortex needs case.dimension = 2".into(),
-                ));
-            }
-            g.validate("verify")?;
+        if let Some(v) = &self.verify {
+            v.validate(self)?;
         }
-        if let Some(Verify::Riemann { left, right, .. }) = &self.verify {
-            if !matches!(self.eos, EosConfig::IdealGas { .. }) {
-                return Err(CaseError(
-                    "verify: the Riemann solution needs eos.type = \"ideal-gas\"".into(),
-                ));
-            }
-            for (k, s) in [("left", *left), ("right", *right)] {
-                if !(s.iter().all(|x| x.is_finite()) && s[0] >= 0.0 && s[2] >= 0.0) {
-                    return Err(CaseError(format!(
-                        "verify.{k}: must be [ρ ≥ 0, v, P ≥ 0], finite, got {s:?}"
-                    )));
-                }
-            }
+        if let Some(b) = &self.blast {
+            b.validate(self)?;
         }
         Ok(())
     }

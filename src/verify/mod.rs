@@ -1,7 +1,9 @@
 //! Verification against exact solutions, shared by tests, the CLI and tools.
 
 pub mod lattice;
+pub mod radial;
 pub mod riemann;
+pub mod sedov;
 pub mod vortex;
 
 use riemann::{ExactRiemann, Primitive};

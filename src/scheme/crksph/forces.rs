@@ -4,7 +4,7 @@
 //! m_i a_ij = −m_j a_ji, linear momentum is conserved to round-off; the force is not central,
 //! so angular momentum only approximately (spec App C).
 
-use super::reproducing::{symmetric_kernel, RkCoefficients};
+use super::reproducing::{PairKernel, RkCoefficients};
 use crate::particles::Vector;
 use crate::system::System;
 
@@ -31,13 +31,14 @@ pub fn pressure_acceleration<const D: usize>(
     sys: &System<D>,
     vol: &[f64],
     coef: &[RkCoefficients<D>],
+    kern: &[PairKernel<D>],
     pressure: &[f64],
 ) -> Vec<Vector<D>> {
     let p = &sys.particles;
     let mut acc = vec![Vector::<D>::zeros(); p.len()];
     sys.gather(&mut acc, |i, a, pr| {
         let j = pr.b;
-        let (w, gw) = symmetric_kernel(sys, p.h[i], p.h[j], &pr.dx, pr.r);
+        let (w, gw) = kern[pr.index];
         let cj = coef[j].reflected(pr.code);
         *a += pair_force(
             &coef[i],

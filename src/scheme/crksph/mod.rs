@@ -26,7 +26,7 @@ use super::standard::{check_range, curl_norm};
 use super::{smoothing, Scheme, SchemeError};
 use crate::particles::Vector;
 use crate::system::System;
-use reproducing::{coefficients, density, symmetric_kernel, RkCoefficients, RkOrder};
+use reproducing::{coefficients, density, pair_kernels, PairKernel, RkCoefficients, RkOrder};
 use serde::{Deserialize, Serialize};
 use viscosity::{pair_q, velocity_gradients, ViscosityParams};
 
@@ -156,7 +156,11 @@ impl<const D: usize> Crksph<D> {
     }
 
     /// h and V (eq 75), the correction coefficients, ρ (eq 76) and the EOS (spec §7.4 steps 1–4).
-    fn state(&mut self, sys: &mut System<D>) -> (Vec<f64>, Vec<RkCoefficients<D>>) {
+    #[allow(clippy::type_complexity)]
+    fn state(
+        &mut self,
+        sys: &mut System<D>,
+    ) -> (Vec<f64>, Vec<RkCoefficients<D>>, Vec<PairKernel<D>>) {
         let n = sys.particles.len();
         self.ones.resize(n, 1.0);
         smoothing::solve_density_and_h_weighted(sys, Some(&self.ones), true);
@@ -164,14 +168,15 @@ impl<const D: usize> Crksph<D> {
         // with X = 1 the solve leaves ρ = m Σ_j W(h_i), i.e. V = m/ρ
         let p = &sys.particles;
         let vol: Vec<f64> = (0..n).map(|i| p.mass[i] / p.rho[i]).collect();
-        let (coef, fallbacks) = coefficients(sys, &vol, self.order);
+        let kern = pair_kernels(sys);
+        let (coef, fallbacks) = coefficients(sys, &vol, &kern, self.order);
         sys.stats.ia_fallbacks = fallbacks;
         sys.stats.ia_fallbacks_total += fallbacks;
-        sys.particles.rho = density(sys, &vol, &coef);
+        sys.particles.rho = density(sys, &vol, &coef, &kern);
         sys.update_eos();
         sys.stats.total_pairs += 2 * sys.neighbours.total_pairs() as u64;
         sys.stats.seconds_density += t0.elapsed().as_secs_f64();
-        (vol, coef)
+        (vol, coef, kern)
     }
 }
 
@@ -187,9 +192,9 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
     }
 
     fn evaluate(&mut self, sys: &mut System<D>) -> Result<(), SchemeError> {
-        let (vol, coef) = self.state(sys);
+        let (vol, coef, kern) = self.state(sys);
         let t0 = std::time::Instant::now();
-        let grads = velocity_gradients(sys, &vol, &coef);
+        let grads = velocity_gradients(sys, &vol, &coef, &kern);
         {
             let p = &mut sys.particles;
             for (i, g) in grads.iter().enumerate() {
@@ -210,7 +215,7 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
             let visc = &self.visc;
             sys.gather_pairs(&mut out, &mut work.acc, |i, o, slot, pr| {
                 let j = pr.b;
-                let (w, gw) = symmetric_kernel(sys, p.h[i], p.h[j], &pr.dx, pr.r);
+                let (w, gw) = kern[pr.index];
                 let cj = coef[j].reflected(pr.code);
                 let (_, gij) = coef[i].corrected(&pr.dx, w, &gw);
                 let (_, gji) = cj.corrected(&(-pr.dx), w, &(-gw));

@@ -85,6 +85,22 @@ pub fn volumes<const D: usize>(sys: &System<D>) -> Vec<f64> {
         .collect()
 }
 
+/// Symmetrised kernel value W_ij and gradient ∇_i W_ij of one listed pair.
+pub type PairKernel<const D: usize> = (f64, Vector<D>);
+
+/// [`symmetric_kernel`] for every pair of the working list, in list order (indexed by
+/// [`crate::system::Pair::index`]): every CRKSPH pass reuses them instead of evaluating the
+/// kernel twice per pair again (the kernel was a third of the run time before this cache).
+pub fn pair_kernels<const D: usize>(sys: &System<D>) -> Vec<PairKernel<D>> {
+    let p = &sys.particles;
+    let mut out = vec![(0.0, Vector::<D>::zeros()); sys.neighbours.total_pairs()];
+    let mut unit = vec![(); p.len()];
+    sys.gather_pairs(&mut unit, &mut out, |i, _, slot, pr| {
+        *slot = symmetric_kernel(sys, p.h[i], p.h[pr.b], &pr.dx, pr.r);
+    });
+    out
+}
+
 /// Symmetrised kernel value and gradient (w.r.t. x_i) for a pair at distance r along dx.
 #[inline]
 pub fn symmetric_kernel<const D: usize>(
@@ -182,6 +198,7 @@ impl<const D: usize> Moments<D> {
 pub fn coefficients<const D: usize>(
     sys: &System<D>,
     vol: &[f64],
+    kern: &[PairKernel<D>],
     order: RkOrder,
 ) -> (Vec<RkCoefficients<D>>, u64) {
     let n = sys.particles.len();
@@ -199,11 +216,11 @@ pub fn coefficients<const D: usize>(
                 sys.kernel.w0(p.h[i]),
                 &Vector::zeros(),
             );
-            for &e in sys.neighbours.of(i) {
+            let first = sys.neighbours.offsets[i];
+            for (k, &e) in sys.neighbours.of(i).iter().enumerate() {
                 let (j, code) = unpack(e);
                 let dx = dom.separation(&p.pos[i], &p.pos[j], code);
-                let r = dx.norm();
-                let (w, gw) = symmetric_kernel(sys, p.h[i], p.h[j], &dx, r);
+                let (w, gw) = kern[first + k];
                 mo.add(vol[j], &dx, w, &gw);
             }
             match mo.coefficients(order) {
@@ -226,13 +243,14 @@ pub fn density<const D: usize>(
     sys: &System<D>,
     vol: &[f64],
     coef: &[RkCoefficients<D>],
+    kern: &[PairKernel<D>],
 ) -> Vec<f64> {
     let p = &sys.particles;
     let n = p.len();
     let mut sums = vec![(0.0, 0.0); n];
     sys.gather(&mut sums, |i, s, pr| {
         let j = pr.b;
-        let (w, gw) = symmetric_kernel(sys, p.h[i], p.h[j], &pr.dx, pr.r);
+        let (w, gw) = kern[pr.index];
         let (wr, _) = coef[i].corrected(&pr.dx, w, &gw);
         let mij = if p.material[i] == p.material[j] {
             p.mass[j]

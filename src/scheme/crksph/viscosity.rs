@@ -6,7 +6,7 @@
 //! (shear included) gives v̂_ij = 0 and Q = 0. Lengths in the paper are in units of its h,
 //! whose kernel support is η_max·h; ours is 2h, so its η = |x_ij| η_max / (2 h_ours).
 
-use super::reproducing::{symmetric_kernel, RkCoefficients};
+use super::reproducing::{PairKernel, RkCoefficients};
 use crate::particles::Vector;
 use crate::system::System;
 use nalgebra::SMatrix;
@@ -43,11 +43,12 @@ pub fn velocity_gradients<const D: usize>(
     sys: &System<D>,
     vol: &[f64],
     coef: &[RkCoefficients<D>],
+    kern: &[PairKernel<D>],
 ) -> Vec<SMatrix<f64, D, D>> {
     let p = &sys.particles;
     let mut out = vec![SMatrix::<f64, D, D>::zeros(); p.len()];
     sys.gather(&mut out, |i, g, pr| {
-        let (w, gw) = symmetric_kernel(sys, p.h[i], p.h[pr.b], &pr.dx, pr.r);
+        let (w, gw) = kern[pr.index];
         let (_, gij) = coef[i].corrected(&pr.dx, w, &gw);
         let vij = p.vel[i] - pr.vb;
         *g -= vij * gij.transpose() * vol[pr.b];

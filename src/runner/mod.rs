@@ -4,11 +4,13 @@
 use crate::case::{Case, CaseError, SnapshotFormat};
 use crate::io::{self, DiagnosticsWriter};
 use crate::sim::{Simulation, SolverError};
-use crate::verify::riemann::{ExactRiemann, Primitive};
-use crate::verify::{shock_tube_errors, ShockTubeErrors};
+use crate::verify::radial::RadialErrors;
+use crate::verify::ShockTubeErrors;
 use std::fmt;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+mod checks;
 
 /// Why a run failed, and the exit code the CLI uses for it.
 #[derive(Debug)]
@@ -84,6 +86,8 @@ pub struct RunSummary {
     pub shock_tube: Option<ShockTubeErrors>,
     /// Gresho vortex: L1 of the velocity, Rosswog Eq. 106.
     pub vortex_l1: Option<f64>,
+    /// Sedov / Noh: L1(ρ), shock position and post-shock density against the exact solution.
+    pub radial: Option<RadialErrors>,
     pub plot: Option<PathBuf>,
     /// Wall-clock seconds per phase: neighbour lists, density/h, gradients, forces.
     pub phase_seconds: [f64; 4],
@@ -250,6 +254,7 @@ fn run_dim<const D: usize>(
         last,
         shock_tube: None,
         vortex_l1: None,
+        radial: None,
         plot: None,
         phase_seconds: {
             let st = &sim.sys.stats;
@@ -272,36 +277,8 @@ fn run_dim<const D: usize>(
         mean_h_iterations: sim.sys.stats.h_iterations_total / sim.sys.stats.h_solves.max(1) as f64,
         neighbour_list_builds: sim.sys.verlet.builds,
     };
-    match &case.verify {
-        Some(crate::case::Verify::Riemann {
-            x0,
-            left,
-            right,
-            x_min,
-            x_max,
-        }) => {
-            let v = RiemannCheck {
-                x0: *x0,
-                left: *left,
-                right: *right,
-                x_min: *x_min,
-                x_max: *x_max,
-            };
-            verify_riemann(case, &v, &sim, out, &mut summary)?;
-        }
-        Some(crate::case::Verify::Gresho(g)) => {
-            let p = &sim.sys.particles;
-            let pts: Vec<([f64; 2], [f64; 2])> = (0..p.len())
-                .map(|i| {
-                    (
-                        [p.pos[i][0], p.pos[i][1.min(D - 1)]],
-                        [p.vel[i][0], p.vel[i][1.min(D - 1)]],
-                    )
-                })
-                .collect();
-            summary.vortex_l1 = Some(g.l1(&pts));
-        }
-        None => {}
+    if let Some(v) = &case.verify {
+        checks::verify(case, v, &sim, out, &mut summary)?;
     }
     let path = out.join("summary.json");
     std::fs::write(
@@ -312,114 +289,3 @@ fn run_dim<const D: usize>(
     Ok(summary)
 }
 
-struct RiemannCheck {
-    x0: f64,
-    left: [f64; 3],
-    right: [f64; 3],
-    x_min: Option<f64>,
-    x_max: Option<f64>,
-}
-
-fn verify_riemann<const D: usize>(
-    case: &Case,
-    v: &RiemannCheck,
-    sim: &Simulation<D>,
-    out: &Path,
-    summary: &mut RunSummary,
-) -> Result<(), RunError> {
-    let gamma = crate::eos::Eos::gamma(&case.eos);
-    let rs = ExactRiemann::new(
-        Primitive {
-            rho: v.left[0],
-            u: v.left[1],
-            p: v.left[2],
-        },
-        Primitive {
-            rho: v.right[0],
-            u: v.right[1],
-            p: v.right[2],
-        },
-        gamma,
-    )
-    .map_err(|e| RunError::Case(CaseError(format!("verify: {e}"))))?;
-    let p = &sim.sys.particles;
-    let samples: Vec<(f64, f64, f64, f64)> = (0..p.len())
-        .map(|i| (p.pos[i][0], p.rho[i], p.vel[i][0], p.pressure[i]))
-        .collect();
-    let (lo, hi) = (
-        v.x_min.unwrap_or(f64::NEG_INFINITY),
-        v.x_max.unwrap_or(f64::INFINITY),
-    );
-    let errs = shock_tube_errors(&rs, v.x0, sim.time, &samples, lo, hi);
-    summary.shock_tube = Some(errs);
-    let (x0, x1) = (case.domain.min[0], case.domain.max[0]);
-    let exact = |f: fn(&Primitive) -> f64| -> Vec<(f64, f64)> {
-        (0..=2000)
-            .map(|i| {
-                let x = x0 + (x1 - x0) * i as f64 / 2000.0;
-                (x, f(&rs.at(x, v.x0, sim.time)))
-            })
-            .collect()
-    };
-    let (er, eu, ep) = (exact(|s| s.rho), exact(|s| s.u), exact(|s| s.p));
-    let ee: Vec<(f64, f64)> = er
-        .iter()
-        .zip(ep.iter())
-        .map(|(&(x, r), &(_, pp))| {
-            (
-                x,
-                if r > 0.0 {
-                    pp / ((gamma - 1.0) * r)
-                } else {
-                    0.0
-                },
-            )
-        })
-        .collect();
-    let col = |f: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> {
-        (0..p.len()).map(|i| (p.pos[i][0], f(i))).collect()
-    };
-    let (pr, pu, pp, pe) = (
-        col(&|i| p.rho[i]),
-        col(&|i| p.vel[i][0]),
-        col(&|i| p.pressure[i]),
-        col(&|i| p.u[i]),
-    );
-    let png = out.join("profile.png");
-    let caption = format!(
-        "{} at t = {:.3}: {} particles, L1(rho) = {:.3e}  [sphfmu run]",
-        case.case.name,
-        sim.time,
-        p.len(),
-        errs.l1_density
-    );
-    crate::io::plot::profile_png(
-        &png,
-        &caption,
-        &[
-            crate::io::plot::Panel {
-                title: "density",
-                particles: &pr,
-                exact: &er,
-            },
-            crate::io::plot::Panel {
-                title: "velocity",
-                particles: &pu,
-                exact: &eu,
-            },
-            crate::io::plot::Panel {
-                title: "pressure",
-                particles: &pp,
-                exact: &ep,
-            },
-            crate::io::plot::Panel {
-                title: "specific internal energy",
-                particles: &pe,
-                exact: &ee,
-            },
-        ],
-    )
-    .map_err(|e| io_err(&png, e))?;
-    summary.plot = Some(png);
-    Ok(())
-}

@@ -1,0 +1,292 @@
+//! The `[verify]` comparisons after a run: shock tubes against the exact Riemann solution,
+//! the Gresho vortex, and radial blasts and implosions (Sedov, Noh) against their similarity
+//! solutions, each with the norms in the summary and, where it helps, a PNG profile.
+
+use super::{io_err, RunError, RunSummary};
+use crate::case::{Case, CaseError, Verify};
+use crate::io::plot::{profile_png, Panel};
+use crate::sim::Simulation;
+use crate::verify::radial::{radial_errors, RadialExact};
+use crate::verify::riemann::{ExactRiemann, Primitive};
+use crate::verify::sedov::Sedov;
+use crate::verify::shock_tube_errors;
+use std::path::Path;
+
+pub(super) fn verify<const D: usize>(
+    case: &Case,
+    v: &Verify,
+    sim: &Simulation<D>,
+    out: &Path,
+    summary: &mut RunSummary,
+) -> Result<(), RunError> {
+    match v {
+        Verify::Riemann {
+            x0,
+            left,
+            right,
+            x_min,
+            x_max,
+        } => {
+            let v = RiemannCheck {
+                x0: *x0,
+                left: *left,
+                right: *right,
+                x_min: *x_min,
+                x_max: *x_max,
+            };
+            verify_riemann(case, &v, sim, out, summary)
+        }
+        Verify::Gresho(g) => {
+            let p = &sim.sys.particles;
+            let pts: Vec<([f64; 2], [f64; 2])> = (0..p.len())
+                .map(|i| {
+                    (
+                        [p.pos[i][0], p.pos[i][1.min(D - 1)]],
+                        [p.vel[i][0], p.vel[i][1.min(D - 1)]],
+                    )
+                })
+                .collect();
+            summary.vortex_l1 = Some(g.l1(&pts));
+            Ok(())
+        }
+        Verify::Sedov {
+            energy,
+            rho0,
+            center,
+            r_max,
+        } => {
+            let gamma = crate::eos::Eos::gamma(&case.eos);
+            let exact = RadialExact::Sedov {
+                solution: Sedov::new(gamma, D),
+                energy: *energy,
+                rho0: *rho0,
+                t: sim.time,
+            };
+            verify_radial(case, &exact, center, *r_max, sim, out, summary)
+        }
+        Verify::Noh {
+            rho0,
+            speed,
+            center,
+            r_max,
+        } => {
+            let exact = RadialExact::Noh {
+                gamma: crate::eos::Eos::gamma(&case.eos),
+                dim: D,
+                rho0: *rho0,
+                speed: *speed,
+                t: sim.time,
+            };
+            verify_radial(case, &exact, center, *r_max, sim, out, summary)
+        }
+    }
+}
+
+/// Radial norms and a PNG of ρ, v_r, P and u against r with the exact curves.
+fn verify_radial<const D: usize>(
+    case: &Case,
+    exact: &RadialExact,
+    center: &[f64],
+    r_max: Option<f64>,
+    sim: &Simulation<D>,
+    out: &Path,
+    summary: &mut RunSummary,
+) -> Result<(), RunError> {
+    let p = &sim.sys.particles;
+    let c = crate::particles::Vector::<D>::from_iterator(center.iter().cloned());
+    let radius = |i: usize| (p.pos[i] - c).norm();
+    let v_r = |i: usize| {
+        let d = p.pos[i] - c;
+        let r = d.norm();
+        if r > 0.0 {
+            p.vel[i].dot(&d) / r
+        } else {
+            0.0
+        }
+    };
+    let samples: Vec<(f64, f64)> = (0..p.len()).map(|i| (radius(i), p.rho[i])).collect();
+    // bin width: the median particle spacing (m/ρ)^{1/D}
+    let mut spacing: Vec<f64> = (0..p.len())
+        .map(|i| (p.mass[i] / p.rho[i]).powf(1.0 / D as f64))
+        .collect();
+    spacing.sort_by(f64::total_cmp);
+    let bin = spacing[spacing.len() / 2];
+    let errs = radial_errors(exact, &samples, bin, r_max.unwrap_or(f64::INFINITY));
+    summary.radial = Some(errs);
+    let r_end = samples.iter().map(|s| s.0).fold(0.0, f64::max);
+    let curve = |f: &dyn Fn(f64) -> f64| -> Vec<(f64, f64)> {
+        (0..=2000)
+            .map(|k| {
+                let r = r_end * k as f64 / 2000.0;
+                (r, f(r))
+            })
+            .collect()
+    };
+    let gamma = crate::eos::Eos::gamma(&case.eos);
+    let er = curve(&|r| exact.at(r).rho);
+    let ev = curve(&|r| exact.at(r).v);
+    let ep = curve(&|r| exact.at(r).p);
+    let eu = curve(&|r| {
+        let s = exact.at(r);
+        s.p / ((gamma - 1.0) * s.rho)
+    });
+    let col = |f: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> {
+        (0..p.len()).map(|i| (radius(i), f(i))).collect()
+    };
+    // Sedov's exact u diverges at the centre: draw it only up to twice the particles' largest u
+    let u_top = 2.0 * (0..p.len()).map(|i| p.u[i]).fold(0.0, f64::max);
+    let eu: Vec<(f64, f64)> = eu.into_iter().filter(|e| e.1 <= u_top).collect();
+    let (pr, pv, pp, pu) = (
+        col(&|i| p.rho[i]),
+        col(&v_r),
+        col(&|i| p.pressure[i]),
+        col(&|i| p.u[i]),
+    );
+    let png = out.join("profile.png");
+    let caption = format!(
+        "{} at t = {:.3}: {} particles, shock r = {:.4} (exact {:.4}), L1(rho) = {:.3e}  [sphfmu run]",
+        case.case.name,
+        sim.time,
+        p.len(),
+        errs.shock_radius,
+        errs.shock_radius_exact,
+        errs.l1_density
+    );
+    let panels = [
+        Panel {
+            title: "density against r",
+            particles: &pr,
+            exact: &er,
+        },
+        Panel {
+            title: "radial velocity",
+            particles: &pv,
+            exact: &ev,
+        },
+        Panel {
+            title: "pressure",
+            particles: &pp,
+            exact: &ep,
+        },
+        Panel {
+            title: "specific internal energy",
+            particles: &pu,
+            exact: &eu,
+        },
+    ];
+    profile_png(&png, &caption, &panels).map_err(|e| io_err(&png, e))?;
+    summary.plot = Some(png);
+    Ok(())
+}
+
+struct RiemannCheck {
+    x0: f64,
+    left: [f64; 3],
+    right: [f64; 3],
+    x_min: Option<f64>,
+    x_max: Option<f64>,
+}
+
+fn verify_riemann<const D: usize>(
+    case: &Case,
+    v: &RiemannCheck,
+    sim: &Simulation<D>,
+    out: &Path,
+    summary: &mut RunSummary,
+) -> Result<(), RunError> {
+    let gamma = crate::eos::Eos::gamma(&case.eos);
+    let rs = ExactRiemann::new(
+        Primitive {
+            rho: v.left[0],
+            u: v.left[1],
+            p: v.left[2],
+        },
+        Primitive {
+            rho: v.right[0],
+            u: v.right[1],
+            p: v.right[2],
+        },
+        gamma,
+    )
+    .map_err(|e| RunError::Case(CaseError(format!("verify: {e}"))))?;
+    let p = &sim.sys.particles;
+    let samples: Vec<(f64, f64, f64, f64)> = (0..p.len())
+        .map(|i| (p.pos[i][0], p.rho[i], p.vel[i][0], p.pressure[i]))
+        .collect();
+    let (lo, hi) = (
+        v.x_min.unwrap_or(f64::NEG_INFINITY),
+        v.x_max.unwrap_or(f64::INFINITY),
+    );
+    let errs = shock_tube_errors(&rs, v.x0, sim.time, &samples, lo, hi);
+    summary.shock_tube = Some(errs);
+    let (x0, x1) = (case.domain.min[0], case.domain.max[0]);
+    let exact = |f: fn(&Primitive) -> f64| -> Vec<(f64, f64)> {
+        (0..=2000)
+            .map(|i| {
+                let x = x0 + (x1 - x0) * i as f64 / 2000.0;
+                (x, f(&rs.at(x, v.x0, sim.time)))
+            })
+            .collect()
+    };
+    let (er, eu, ep) = (exact(|s| s.rho), exact(|s| s.u), exact(|s| s.p));
+    let ee: Vec<(f64, f64)> = er
+        .iter()
+        .zip(ep.iter())
+        .map(|(&(x, r), &(_, pp))| {
+            (
+                x,
+                if r > 0.0 {
+                    pp / ((gamma - 1.0) * r)
+                } else {
+                    0.0
+                },
+            )
+        })
+        .collect();
+    let col = |f: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> {
+        (0..p.len()).map(|i| (p.pos[i][0], f(i))).collect()
+    };
+    let (pr, pu, pp, pe) = (
+        col(&|i| p.rho[i]),
+        col(&|i| p.vel[i][0]),
+        col(&|i| p.pressure[i]),
+        col(&|i| p.u[i]),
+    );
+    let png = out.join("profile.png");
+    let caption = format!(
+        "{} at t = {:.3}: {} particles, L1(rho) = {:.3e}  [sphfmu run]",
+        case.case.name,
+        sim.time,
+        p.len(),
+        errs.l1_density
+    );
+    profile_png(
+        &png,
+        &caption,
+        &[
+            Panel {
+                title: "density",
+                particles: &pr,
+                exact: &er,
+            },
+            Panel {
+                title: "velocity",
+                particles: &pu,
+                exact: &eu,
+            },
+            Panel {
+                title: "pressure",
+                particles: &pp,
+                exact: &ep,
+            },
+            Panel {
+                title: "specific internal energy",
+                particles: &pe,
+                exact: &ee,
+            },
+        ],
+    )
+    .map_err(|e| io_err(&png, e))?;
+    summary.plot = Some(png);
+    Ok(())
+}
