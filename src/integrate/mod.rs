@@ -189,7 +189,7 @@ impl<const D: usize> Integrator<D> {
                 }
                 // predictor to the midpoint with the previous (midpoint) derivatives
                 combine(sys, &s0, 0.0, 1.0, 0.5 * dt);
-                sys.predict_h(dt);
+                sys.predict_h(0.5 * dt);
                 scheme.evaluate(sys)?;
                 sys.particles.hold_frozen();
                 // full step from the start state with the midpoint derivatives

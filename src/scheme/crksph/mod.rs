@@ -5,9 +5,12 @@
 //!
 //! Decisions for the spec's open points (§11), made here and nowhere else:
 //! * h (§7.3, item 8): the number-density form of the "simple, robust substitute",
-//!   h_i = η V_i^{1/ν} with V_i = 1/Σ_j W(x_ij, h_i) (eq 75) solved by the Newton iteration of
-//!   [`smoothing`] with weights X = 1. Like IdealH it depends on the point distribution only,
-//!   not on masses, so an equally spaced multi-material lattice keeps one h (spec §9.3).
+//!   h_i = η V_i^{1/ν} with V_i = 1/Σ_j W(x_ij, h_i) (eq 75). At t = 0 it is solved by the
+//!   Newton iteration of [`smoothing`] with weights X = 1; afterwards, as IdealH does, the
+//!   midpoint evaluation computes h_ideal = η V^{1/ν} (one fixed-point step, the relation
+//!   hardly depends on h) and the end-of-step state takes h¹ = h_ideal (spec §7.1 step 4).
+//!   Like IdealH it depends on the point distribution only, not on masses, so an equally
+//!   spaced multi-material lattice keeps one h (spec §9.3).
 //! * ρ: eq 76 at every evaluation (midpoint and end of step); no continuity equation (eq 79).
 //! * Integrator (item 7): `crk-rk2`, Spheral's CheapSynchronousRK2 (spec §7.1), CFL 0.25.
 //! * Time step (§7.2): the scheme writes v_sig = η·max(c, √(Q_max/ρ), approach speed) and
@@ -26,7 +29,9 @@ use super::standard::{check_range, curl_norm};
 use super::{smoothing, Scheme, SchemeError};
 use crate::particles::Vector;
 use crate::system::System;
-use reproducing::{coefficients, density, pair_kernels, PairKernel, RkCoefficients, RkOrder};
+use reproducing::{
+    coefficients, density, pair_kernels_and_volumes, PairKernel, RkCoefficients, RkOrder,
+};
 use serde::{Deserialize, Serialize};
 use viscosity::{pair_q, velocity_gradients, ViscosityParams};
 
@@ -139,6 +144,8 @@ pub struct Crksph<const D: usize> {
     order: RkOrder,
     work: PairWork<D>,
     ones: Vec<f64>,
+    /// h_ideal of the latest evaluation, for the end-of-step state (empty: solve h).
+    h_next: Vec<f64>,
 }
 
 impl<const D: usize> Crksph<D> {
@@ -152,6 +159,7 @@ impl<const D: usize> Crksph<D> {
             },
             work: PairWork::default(),
             ones: vec![],
+            h_next: vec![],
         }
     }
 
@@ -160,15 +168,27 @@ impl<const D: usize> Crksph<D> {
     fn state(
         &mut self,
         sys: &mut System<D>,
+        solve_h: bool,
     ) -> (Vec<f64>, Vec<RkCoefficients<D>>, Vec<PairKernel<D>>) {
         let n = sys.particles.len();
-        self.ones.resize(n, 1.0);
-        smoothing::solve_density_and_h_weighted(sys, Some(&self.ones), true);
+        if solve_h {
+            self.ones.resize(n, 1.0);
+            smoothing::solve_density_and_h_weighted(sys, Some(&self.ones), true);
+        } else {
+            smoothing::update_lists(sys);
+        }
         let t0 = std::time::Instant::now();
-        // with X = 1 the solve leaves ρ = m Σ_j W(h_i), i.e. V = m/ρ
+        let (kern, vol) = pair_kernels_and_volumes(sys);
+        // h_ideal = η V^{1/ν}, at most 25 % from the current h per step (IdealH relaxes too)
+        let (eta, h_max) = (sys.eta, sys.h_max);
         let p = &sys.particles;
-        let vol: Vec<f64> = (0..n).map(|i| p.mass[i] / p.rho[i]).collect();
-        let kern = pair_kernels(sys);
+        self.h_next = (0..n)
+            .map(|i| {
+                (eta * vol[i].powf(1.0 / D as f64))
+                    .clamp(0.8 * p.h[i], 1.25 * p.h[i])
+                    .min(h_max)
+            })
+            .collect();
         let (coef, fallbacks) = coefficients(sys, &vol, &kern, self.order);
         sys.stats.ia_fallbacks = fallbacks;
         sys.stats.ia_fallbacks_total += fallbacks;
@@ -192,7 +212,9 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
     }
 
     fn evaluate(&mut self, sys: &mut System<D>) -> Result<(), SchemeError> {
-        let (vol, coef, kern) = self.state(sys);
+        // Newton solve for h only when no h_ideal exists yet (the first evaluation)
+        let first = self.h_next.len() != sys.particles.len();
+        let (vol, coef, kern) = self.state(sys, first);
         let t0 = std::time::Instant::now();
         let grads = velocity_gradients(sys, &vol, &coef, &kern);
         {
@@ -260,7 +282,11 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
     }
 
     fn refresh(&mut self, sys: &mut System<D>) {
-        self.state(sys);
+        let solve = self.h_next.len() != sys.particles.len();
+        if !solve {
+            sys.particles.h.clone_from(&self.h_next);
+        }
+        self.state(sys, solve);
     }
 
     fn pair_work(&self) -> Option<&PairWork<D>> {

@@ -101,6 +101,28 @@ pub fn pair_kernels<const D: usize>(sys: &System<D>) -> Vec<PairKernel<D>> {
     out
 }
 
+/// [`pair_kernels`] and the volumes V_i = 1/Σ_j W(x_ij, h_i) (eq 75, self included) from the
+/// same kernel evaluations.
+pub fn pair_kernels_and_volumes<const D: usize>(
+    sys: &System<D>,
+) -> (Vec<PairKernel<D>>, Vec<f64>) {
+    let p = &sys.particles;
+    let k = &sys.kernel;
+    let mut out = vec![(0.0, Vector::<D>::zeros()); sys.neighbours.total_pairs()];
+    let mut sums: Vec<f64> = p.h.iter().map(|&h| k.w0(h)).collect();
+    sys.gather_pairs(&mut sums, &mut out, |i, s, slot, pr| {
+        let (ei, ej) = (k.eval(pr.r, p.h[i]), k.eval(pr.r, p.h[pr.b]));
+        *s += ei.w;
+        let gw = if pr.r > 0.0 {
+            pr.dx * (0.5 * (ei.dwdr + ej.dwdr) / pr.r)
+        } else {
+            Vector::zeros()
+        };
+        *slot = (0.5 * (ei.w + ej.w), gw);
+    });
+    (out, sums.iter().map(|s| 1.0 / s).collect())
+}
+
 /// Symmetrised kernel value and gradient (w.r.t. x_i) for a pair at distance r along dx.
 #[inline]
 pub fn symmetric_kernel<const D: usize>(
