@@ -613,6 +613,24 @@ impl Case {
 
     /// Build the simulation (particles, first evaluation) in dimension D.
     pub fn build<const D: usize>(&self) -> Result<Simulation<D>, CaseError> {
+        let sys = self.system::<D>()?;
+        self.simulation(sys)
+    }
+
+    /// The simulation of this case's scheme, integrator and step control on `sys` (a system
+    /// from [`Self::system`], possibly adjusted: tests place particles the lattice cannot).
+    pub fn simulation<const D: usize>(&self, sys: System<D>) -> Result<Simulation<D>, CaseError> {
+        Simulation::new(
+            sys,
+            self.scheme.build::<D>(),
+            self.integrator(),
+            self.step_control(),
+        )
+        .map_err(|e: SolverError| CaseError(format!("initial state: {e}")))
+    }
+
+    /// The particles, box, kernel and EOS of this case in dimension D, before any evaluation.
+    pub fn system<const D: usize>(&self) -> Result<System<D>, CaseError> {
         if D != self.case.dimension {
             return Err(CaseError(format!(
                 "case.dimension = {} but built in {D}D",
@@ -659,7 +677,7 @@ impl Case {
                 gravity[k] = g[k];
             }
         }
-        let sys = System {
+        Ok(System {
             particles,
             domain,
             kernel,
@@ -671,13 +689,6 @@ impl Case {
             verlet: Default::default(),
             neighbours: Default::default(),
             stats: Default::default(),
-        };
-        Simulation::new(
-            sys,
-            self.scheme.build::<D>(),
-            self.integrator(),
-            self.step_control(),
-        )
-        .map_err(|e: SolverError| CaseError(format!("initial state: {e}")))
+        })
     }
 }
