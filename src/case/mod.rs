@@ -376,6 +376,14 @@ impl Case {
             }
         }
         self.scheme.validate()?;
+        if matches!(self.scheme, SchemeConfig::Psph(_))
+            && !matches!(self.eos, EosConfig::IdealGas { .. })
+        {
+            return Err(CaseError(
+                "scheme.name: \"psph\" sums the pressure from u and needs eos.type = \"ideal-gas\""
+                    .into(),
+            ));
+        }
         let t = &self.time;
         let pos = |key: &str, v: f64| -> Result<(), CaseError> {
             if v.is_finite() && v > 0.0 {

@@ -3,7 +3,10 @@
 //! module behind [`Scheme`]; all of them loop over pairs through [`System::gather`].
 
 pub mod compatible;
+pub mod compsph;
 pub mod crksph;
+pub mod cullen;
+pub mod psph;
 pub mod rosswog;
 pub mod rpsph;
 pub mod smoothing;
@@ -60,6 +63,12 @@ pub enum SchemeConfig {
     RosswogF4(rosswog::RosswogOverrides),
     /// CRKSPH (Frontiere, Raskin & Owen 2017), see [`crksph`].
     Crksph(crksph::CrksphParams),
+    /// Compatible SPH (the CRKSPH paper's App E), see [`compsph`].
+    Compsph(compsph::CompsphParams),
+    /// compSPH with the Cullen–Dehnen switch (App F), see [`cullen`].
+    CompsphCullen(compsph::CompsphParams),
+    /// Pressure–energy SPH with Cullen–Dehnen viscosity (App G), see [`psph`].
+    Psph(psph::PsphParams),
 }
 
 impl SchemeConfig {
@@ -68,6 +77,8 @@ impl SchemeConfig {
             SchemeConfig::Standard(p) => p.validate(),
             SchemeConfig::Rpsph(p) => p.validate(),
             SchemeConfig::Crksph(p) => p.validate(),
+            SchemeConfig::Compsph(p) | SchemeConfig::CompsphCullen(p) => p.validate(),
+            SchemeConfig::Psph(p) => p.validate(),
             _ => {
                 let (preset, o) = self.rosswog().expect("rosswog variant");
                 o.validate(preset)
@@ -79,11 +90,25 @@ impl SchemeConfig {
             SchemeConfig::Standard(p) => Box::new(standard::StandardSph::new(p)),
             SchemeConfig::Rpsph(p) => Box::new(rpsph::build(p)),
             SchemeConfig::Crksph(p) => Box::new(crksph::Crksph::<D>::new(p)),
+            SchemeConfig::Compsph(p) => Box::new(compsph::Compsph::<D>::new(p, false)),
+            SchemeConfig::CompsphCullen(p) => Box::new(compsph::Compsph::<D>::new(p, true)),
+            SchemeConfig::Psph(p) => Box::new(psph::Psph::new(p)),
             _ => {
                 let (preset, o) = self.rosswog().expect("rosswog variant");
                 Box::new(rosswog::Rosswog::new(preset, o.resolve(preset)))
             }
         }
+    }
+
+    /// One of the CRKSPH paper's schemes (CRKSPH, compSPH, compSPH+Cullen, PSPH).
+    fn crksph_paper(&self) -> bool {
+        matches!(
+            self,
+            SchemeConfig::Crksph(_)
+                | SchemeConfig::Compsph(_)
+                | SchemeConfig::CompsphCullen(_)
+                | SchemeConfig::Psph(_)
+        )
     }
 
     fn rosswog(&self) -> Option<(rosswog::Preset, rosswog::RosswogOverrides)> {
@@ -101,8 +126,15 @@ impl SchemeConfig {
     pub fn preferred_kernel(&self) -> (crate::kernel::KernelName, Option<f64>) {
         use crate::kernel::KernelName;
         // CRKSPH spec Table D.1, η = η_max·n_h/2: W7 with n_h = 1 → η = 2.
-        if let SchemeConfig::Crksph(_) = self {
-            return (KernelName::SepticSpline, Some(2.0));
+        match self {
+            SchemeConfig::Crksph(_) => return (KernelName::SepticSpline, Some(2.0)),
+            // W5 (our M6, native support 3) with n_h = 4/3
+            SchemeConfig::Compsph(_) | SchemeConfig::CompsphCullen(_) => {
+                return (KernelName::QuinticSpline, Some(2.0))
+            }
+            // the PSPH quintic (native support 1) with n_h = 4
+            SchemeConfig::Psph(_) => return (KernelName::PsphQuintic, Some(2.0)),
+            _ => {}
         }
         match self.rosswog() {
             Some((preset, _)) => {
@@ -116,7 +148,7 @@ impl SchemeConfig {
     /// Integrator and Courant factor a scheme runs with when `[time]` does not say.
     pub fn preferred_integrator(&self) -> (crate::integrate::IntegratorKind, f64) {
         // CRKSPH spec §7.1: the modified RK2 with CFL 0.25 for every scheme of that paper.
-        if let SchemeConfig::Crksph(_) = self {
+        if self.crksph_paper() {
             return (crate::integrate::IntegratorKind::CrkRk2, 0.25);
         }
         match self.rosswog() {

@@ -54,6 +54,7 @@ impl RpsphParams {
             balsara: self.balsara,
             conductivity: self.conductivity,
             epsilon: self.epsilon,
+            cullen_dehnen: false,
         }
     }
     pub fn validate(&self) -> Result<(), String> {

@@ -32,6 +32,9 @@ pub struct StandardParams {
     pub conductivity: f64,
     /// ε in μ_ab's denominator, (0, 1].
     pub epsilon: f64,
+    /// Per-particle α from the Cullen–Dehnen switch (replaces Balsara; α and β both scale
+    /// with ½(α_a + α_b), CRKSPH spec §8.2).
+    pub cullen_dehnen: bool,
 }
 
 impl Default for StandardParams {
@@ -42,6 +45,7 @@ impl Default for StandardParams {
             balsara: true,
             conductivity: 0.0,
             epsilon: 0.01,
+            cullen_dehnen: false,
         }
     }
 }
@@ -76,6 +80,7 @@ pub struct StandardSph {
     name: &'static str,
     /// Slot of the Balsara factor in `extra_scalars`.
     balsara_slot: usize,
+    cullen: Option<super::cullen::CullenDehnen>,
 }
 
 impl StandardSph {
@@ -93,6 +98,7 @@ impl StandardSph {
             form,
             name,
             balsara_slot: usize::MAX,
+            cullen: None,
         }
     }
 }
@@ -169,14 +175,31 @@ impl<const D: usize> Scheme<D> for StandardSph {
 
     fn init(&mut self, sys: &mut System<D>) {
         self.balsara_slot = sys.particles.add_scalar_field(1.0);
-        let alpha = self.params.alpha;
-        sys.particles.alpha.iter_mut().for_each(|a| *a = alpha);
+        if self.params.cullen_dehnen {
+            self.cullen = Some(super::cullen::CullenDehnen::init(
+                sys,
+                super::cullen::CullenParams::default(),
+            ));
+        } else {
+            let alpha = self.params.alpha;
+            sys.particles.alpha.iter_mut().for_each(|a| *a = alpha);
+        }
+    }
+
+    fn end_step(&mut self, sys: &mut System<D>, dt: f64) {
+        if let Some(cd) = &self.cullen {
+            cd.end_step(sys, dt);
+        }
     }
 
     fn evaluate(&mut self, sys: &mut System<D>) -> Result<(), SchemeError> {
         smoothing::solve_density_and_h(sys);
         sys.update_eos();
-        velocity_gradients(sys, self.balsara_slot, self.params.balsara);
+        match &self.cullen {
+            // the Balsara factor stays 1: the switch limits shear itself
+            Some(cd) => cd.measure(sys),
+            None => velocity_gradients(sys, self.balsara_slot, self.params.balsara),
+        }
         force_pass(sys, &self.params, self.balsara_slot, self.form);
         Ok(())
     }
@@ -332,8 +355,12 @@ pub(crate) fn force_pass<const D: usize>(
                     let mu = hbar * w * pr.r / (pr.r * pr.r + prm.epsilon * hbar * hbar);
                     let alpha = 0.5 * (ra.alpha + rb.alpha);
                     let fbal = 0.5 * (ra.bal + rb.bal);
-                    let pi =
-                        fbal * (-alpha * 0.5 * (ra.c + rb.c) * mu + prm.beta * mu * mu) / rho_bar;
+                    let beta = if prm.cullen_dehnen {
+                        prm.beta * alpha
+                    } else {
+                        prm.beta
+                    };
+                    let pi = fbal * (-alpha * 0.5 * (ra.c + rb.c) * mu + beta * mu * mu) / rho_bar;
                     force += pi * fbar;
                     dudt += 0.5 * mb * pi * w * fbar;
                 }

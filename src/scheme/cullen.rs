@@ -1,0 +1,175 @@
+//! Cullen & Dehnen (2010) viscosity switch in Hopkins' form (CRKSPH spec §8.2, App F, eqs
+//! F.3–F.6), usable with compSPH, standard SPH and PSPH: every particle carries a viscosity
+//! coefficient α_i that rises when the flow starts to converge (∂t ∇·v < 0) and decays
+//! otherwise, limited in shear.
+//!
+//! Decisions for spec §11 item 10, made here:
+//! * β_ξ = 1 (Hopkins); ξ_i uses the neighbour's sgn(∇·v_j) (F.4 as Spheral codes it).
+//! * F.5's denominator is α_max|∂t∇·v| + β_c c_i² (f_kern h_i)⁻², the paper's c_i² (Spheral
+//!   uses v_sig²), with h_i the kernel support (our 2h).
+//! * ∂t(∇·v) = (∇·v_now − ∇·v_prev)/Δt between the final-stage evaluations of two steps;
+//!   α0 starts at α_min and ∇·v_prev at 0, so a flow converging at t = 0 switches on at once.
+//! * α is updated after each step (`end_step`) and held during the next one.
+//!
+//! ∇v is the linearly corrected SPH gradient (E.4 with E.6), exact for linear fields.
+
+use crate::system::System;
+use nalgebra::SMatrix;
+use rayon::prelude::*;
+
+/// Constants of the switch (spec §8.2, [P]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CullenParams {
+    pub alpha_min: f64,
+    pub alpha_max: f64,
+    pub beta_c: f64,
+    pub beta_d: f64,
+    pub beta_xi: f64,
+    pub f_kern: f64,
+}
+
+impl Default for CullenParams {
+    fn default() -> Self {
+        Self {
+            alpha_min: 0.02,
+            alpha_max: 2.0,
+            beta_c: 0.7,
+            beta_d: 0.05,
+            beta_xi: 1.0,
+            f_kern: 1.0 / 3.0,
+        }
+    }
+}
+
+/// The switch's per-particle fields live in `extra_scalars` so particle reorders carry them.
+#[derive(Debug, Clone, Copy)]
+pub struct CullenDehnen {
+    pub params: CullenParams,
+    alpha0: usize,
+    div_prev: usize,
+    /// ξ_i (F.4) and the shear norm S:S of the latest evaluation
+    xi: usize,
+    shear2: usize,
+    /// v_sig,i = max_j [½(c_i + c_j) − min(0, v_ij·x̂_ij)] of the latest evaluation
+    vsig: usize,
+}
+
+impl CullenDehnen {
+    /// Register the fields; α = α0 = α_min to start.
+    pub fn init<const D: usize>(sys: &mut System<D>, params: CullenParams) -> Self {
+        let p = &mut sys.particles;
+        let s = Self {
+            params,
+            alpha0: p.add_scalar_field(params.alpha_min),
+            div_prev: p.add_scalar_field(0.0),
+            xi: p.add_scalar_field(1.0),
+            shear2: p.add_scalar_field(0.0),
+            vsig: p.add_scalar_field(0.0),
+        };
+        p.alpha.iter_mut().for_each(|a| *a = params.alpha_min);
+        s
+    }
+
+    /// The corrected velocity gradient (E.4/E.6) → `div_v`, `curl_v`, S:S; then ξ (F.4) and
+    /// v_sig. Needs ρ, h and c of the current state.
+    pub fn measure<const D: usize>(&self, sys: &mut System<D>) {
+        let t0 = std::time::Instant::now();
+        let n = sys.particles.len();
+        let mut sums = vec![(SMatrix::<f64, D, D>::zeros(), SMatrix::<f64, D, D>::zeros()); n];
+        {
+            let p = &sys.particles;
+            let k = &sys.kernel;
+            sys.gather(&mut sums, |i, s, pr| {
+                if pr.r <= 0.0 {
+                    return;
+                }
+                let gw = pr.dx * (k.dwdr(pr.r, p.h[i]) / pr.r);
+                let m = p.mass[pr.b];
+                s.0 += (p.vel[i] - pr.vb) * gw.transpose() * m;
+                s.1 += pr.dx * gw.transpose() * m;
+            });
+        }
+        let grads: Vec<SMatrix<f64, D, D>> = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let (v, m) = &sums[i];
+                // E.6 makes E.4 exact for linear v; fall back to the plain estimate when M is
+                // near-singular (Spheral: |det M| > 1e-10)
+                match super::rosswog::gradients::invert(m) {
+                    Some(minv) => v * minv,
+                    None => -v / sys.particles.rho[i],
+                }
+            })
+            .collect();
+        {
+            let p = &mut sys.particles;
+            let d = D as f64;
+            for (i, g) in grads.iter().enumerate() {
+                let div = g.trace();
+                p.div_v[i] = div;
+                p.curl_v[i] = super::standard::curl_norm(g);
+                let s = (g + g.transpose()) * 0.5 - SMatrix::<f64, D, D>::identity() * (div / d);
+                p.extra_scalars[self.shear2][i] = (s * s).trace();
+            }
+        }
+        let mut xv = vec![(0.0, 0.0); n];
+        {
+            let p = &sys.particles;
+            let k = &sys.kernel;
+            sys.gather(&mut xv, |i, o, pr| {
+                let j = pr.b;
+                o.0 += p.div_v[j].signum() * p.mass[j] * k.w(pr.r, p.h[i]);
+                let w = if pr.r > 0.0 {
+                    (p.vel[i] - pr.vb).dot(&pr.dx) / pr.r
+                } else {
+                    0.0
+                };
+                o.1 = f64::max(o.1, 0.5 * (p.sound_speed[i] + p.sound_speed[j]) - w.min(0.0));
+            });
+        }
+        let p = &mut sys.particles;
+        for (i, (sum, vs)) in xv.into_iter().enumerate() {
+            let self_term = p.div_v[i].signum() * p.mass[i] * sys.kernel.w0(p.h[i]);
+            p.extra_scalars[self.xi][i] = 1.0 - (sum + self_term) / p.rho[i];
+            p.extra_scalars[self.vsig][i] = vs.max(p.sound_speed[i]);
+        }
+        sys.stats.total_pairs += 2 * sys.neighbours.total_pairs() as u64;
+        sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
+    }
+
+    /// Evolve α0 over the step just taken (F.5, F.6) and set α (F.3).
+    pub fn end_step<const D: usize>(&self, sys: &mut System<D>, dt: f64) {
+        if !(dt > 0.0) {
+            return;
+        }
+        let c = self.params;
+        let p = &mut sys.particles;
+        for i in 0..p.len() {
+            let div = p.div_v[i];
+            let ddt = (div - p.extra_scalars[self.div_prev][i]) / dt;
+            p.extra_scalars[self.div_prev][i] = div;
+            let h_supp = crate::kernel::SUPPORT * p.h[i];
+            let alpha_tmp = if ddt >= 0.0 || div >= 0.0 {
+                0.0
+            } else {
+                let a = c.alpha_max * ddt.abs();
+                let cs = p.sound_speed[i];
+                a / (a + c.beta_c * cs * cs / (c.f_kern * h_supp).powi(2))
+            };
+            let a0 = p.extra_scalars[self.alpha0][i];
+            let vsig = p.extra_scalars[self.vsig][i];
+            let a0_new = if alpha_tmp >= a0 {
+                alpha_tmp
+            } else {
+                alpha_tmp
+                    + (a0 - alpha_tmp) * (-c.beta_d * dt * vsig / (2.0 * c.f_kern * h_supp)).exp()
+            };
+            p.extra_scalars[self.alpha0][i] = a0_new;
+            let xi = p.extra_scalars[self.xi][i];
+            let x = (c.beta_xi * xi.powi(4) * div).powi(2);
+            let s2 = p.extra_scalars[self.shear2][i];
+            let limiter = if x + s2 > 0.0 { x / (x + s2) } else { 1.0 };
+            p.alpha[i] = (a0_new * limiter).max(c.alpha_min);
+        }
+    }
+}

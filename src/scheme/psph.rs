@@ -1,0 +1,275 @@
+//! Pressure–energy SPH, PSPH (CRKSPH spec §8.3, App G; Hopkins 2015 after Saitoh & Makino's
+//! DISPH), with the Cullen–Dehnen switch and Hopkins' artificial conductivity:
+//!
+//!   P_i = Σ_j (γ−1) m_j u_j W_i,  ρ_i = Σ_j m_j W_i,  n_i = Σ_j W_i   (G.1–G.3, self included)
+//!   a_i = −Σ_j m_j [(γ−1)² u_i u_j (f_ij/P_i ∇W_i + f_ji/P_j ∇W_j) + q_ij]     (G.4)
+//!   du_i/dt = Σ_j m_j (γ−1)² u_i u_j (f_ij/P_i) v_ij·∇W_i + ½ Σ_j m_j v_ij·q_ij + conduction
+//!
+//! with W_i = W(x_ij, h_i), the grad-h factor f_ij of G.7–G.9 and q_ij of G.6.
+//! Decisions (spec §11 item 11 and gaps), made here:
+//! * G.4 pairs f_ij with P_i and ∇W_i ([R]); q_ij sits inside the m_j sum.
+//! * Π_i = Q_i/ρ_i² from the unlimited Monaghan–Gingold Q of spec §6 with C_l,ij = ½(α_i+α_j)C_l
+//!   (and C_q alike), so q_ij = ½(Q_i/ρ_i + Q_j/ρ_j)(∇W_i + ∇W_j)/(ρ_i + ρ_j). Base C_l = η_max/2,
+//!   C_q = η_max/4 (spec Table D.1's scaling; 0.5 and 0.25 for the PSPH quintic).
+//! * The paper evolves the total energy (G.5); we integrate the equivalent u equation above,
+//!   so total energy is conserved to the integrator's accuracy, not to round-off.
+//! * Conduction (G.10–G.12) projects ∇W_i + ∇W_j on x̂_ij ([R]); α_C = 0.25.
+//! * h from the number density: h = η n^{−1/ν} (Hopkins' choice for PSPH), solved by Newton.
+//! * f_ij = 1 where m_j u_j = 0 (cold gas: the G.7 correction is undefined there).
+
+use super::cullen::{CullenDehnen, CullenParams};
+use super::standard::check_range;
+use super::{smoothing, Scheme, SchemeError};
+use crate::particles::Vector;
+use crate::system::System;
+use nalgebra::SMatrix;
+use serde::{Deserialize, Serialize};
+
+/// Parameters of `[scheme] name = "psph"`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PsphParams {
+    /// Base linear viscosity coefficient (default η_max/2 of the kernel), [0, 10].
+    pub c_l: Option<f64>,
+    /// Base quadratic coefficient (default η_max/4), [0, 10].
+    pub c_q: Option<f64>,
+    /// ε² in μ's denominator, (0, 1].
+    pub epsilon2: f64,
+    /// Artificial conductivity α_C (0 = off, App B's box test), [0, 5].
+    pub conductivity: f64,
+}
+
+impl Default for PsphParams {
+    fn default() -> Self {
+        Self {
+            c_l: None,
+            c_q: None,
+            epsilon2: 1e-2,
+            conductivity: 0.25,
+        }
+    }
+}
+
+impl PsphParams {
+    pub fn validate(&self) -> Result<(), String> {
+        if let Some(c) = self.c_l {
+            check_range("scheme.c_l", c, 0.0, 10.0)?;
+        }
+        if let Some(c) = self.c_q {
+            check_range("scheme.c_q", c, 0.0, 10.0)?;
+        }
+        check_range("scheme.conductivity", self.conductivity, 0.0, 5.0)?;
+        if !(self.epsilon2 > 0.0 && self.epsilon2 <= 1.0) {
+            return Err(format!(
+                "scheme.epsilon2: must be in (0, 1], got {}",
+                self.epsilon2
+            ));
+        }
+        Ok(())
+    }
+}
+
+pub struct Psph {
+    params: PsphParams,
+    gamma: f64,
+    cullen: Option<CullenDehnen>,
+    visc: super::crksph::viscosity::ViscosityParams,
+    ones: Vec<f64>,
+    /// C_i of f_ij = 1 − C_i/(m_j u_j) (G.7), per particle
+    fcoef: Vec<f64>,
+}
+
+impl Psph {
+    pub fn new(params: PsphParams) -> Self {
+        Self {
+            params,
+            gamma: 5.0 / 3.0,
+            cullen: None,
+            visc: Default::default(),
+            ones: vec![],
+            fcoef: vec![],
+        }
+    }
+
+    /// h from the number density, then ρ, P (G.1–G.2) and the f_ij coefficients (G.7–G.9).
+    fn state<const D: usize>(&mut self, sys: &mut System<D>) {
+        let n = sys.particles.len();
+        self.ones.resize(n, 1.0);
+        smoothing::solve_density_and_h_weighted(sys, Some(&self.ones), true);
+        let t0 = std::time::Instant::now();
+        let g1 = self.gamma - 1.0;
+        let k = sys.kernel;
+        // (ρ, P, n, ∂P/∂h, ∂n/∂h), self terms first
+        let mut sums: Vec<[f64; 5]> = {
+            let p = &sys.particles;
+            (0..n)
+                .map(|i| {
+                    let (w0, dw0) = (k.w0(p.h[i]), k.dwdh0(p.h[i]));
+                    let mu = g1 * p.mass[i] * p.u[i];
+                    [p.mass[i] * w0, mu * w0, w0, mu * dw0, dw0]
+                })
+                .collect()
+        };
+        {
+            let p = &sys.particles;
+            sys.gather(&mut sums, |i, s, pr| {
+                let j = pr.b;
+                let e = k.eval(pr.r, p.h[i]);
+                let mu = g1 * p.mass[j] * p.u[j];
+                s[0] += p.mass[j] * e.w;
+                s[1] += mu * e.w;
+                s[2] += e.w;
+                s[3] += mu * e.dwdh;
+                s[4] += e.dwdh;
+            });
+        }
+        let d = D as f64;
+        let gamma = self.gamma;
+        let p = &mut sys.particles;
+        self.fcoef.resize(n, 0.0);
+        for (i, s) in sums.iter().enumerate() {
+            let [rho, pres, num, dp_dh, dn_dh] = *s;
+            p.rho[i] = rho;
+            p.pressure[i] = pres;
+            p.sound_speed[i] = (gamma * pres.max(0.0) / rho).sqrt();
+            let h = p.h[i];
+            // G.7: f_ij = 1 − [h/(ν(γ−1) n m_j u_j)] ∂P/∂h [1 + (h/(ν n)) ∂n/∂h]⁻¹
+            self.fcoef[i] = h * dp_dh / (d * g1 * num) / (1.0 + h / (d * num) * dn_dh);
+        }
+        sys.stats.total_pairs += sys.neighbours.total_pairs() as u64;
+        sys.stats.seconds_density += t0.elapsed().as_secs_f64();
+    }
+}
+
+#[derive(Clone, Copy)]
+struct Acc<const D: usize> {
+    acc: Vector<D>,
+    dudt: f64,
+    q_max: f64,
+    approach: f64,
+}
+
+impl<const D: usize> Default for Acc<D> {
+    fn default() -> Self {
+        Self {
+            acc: Vector::zeros(),
+            dudt: 0.0,
+            q_max: 0.0,
+            approach: 0.0,
+        }
+    }
+}
+
+impl<const D: usize> Scheme<D> for Psph {
+    fn name(&self) -> &'static str {
+        "psph"
+    }
+
+    fn init(&mut self, sys: &mut System<D>) {
+        self.gamma = crate::eos::Eos::gamma(&sys.eos);
+        let eta_max = sys.kernel.kernel.native_support();
+        self.visc = super::crksph::viscosity::ViscosityParams {
+            c_l: self.params.c_l.unwrap_or(0.5 * eta_max),
+            c_q: self.params.c_q.unwrap_or(0.25 * eta_max),
+            eps2: self.params.epsilon2,
+            native_support: eta_max,
+            limiter: false,
+            ..Default::default()
+        };
+        self.cullen = Some(CullenDehnen::init(sys, CullenParams::default()));
+    }
+
+    fn evaluate(&mut self, sys: &mut System<D>) -> Result<(), SchemeError> {
+        self.state(sys);
+        if let Some(cd) = &self.cullen {
+            cd.measure(sys);
+        }
+        let t0 = std::time::Instant::now();
+        let n = sys.particles.len();
+        let mut out = vec![Acc::<D>::default(); n];
+        let g1 = self.gamma - 1.0;
+        let alpha_c = self.params.conductivity;
+        {
+            let p = &sys.particles;
+            let k = &sys.kernel;
+            let fc = &self.fcoef;
+            let base = self.visc;
+            let zero = SMatrix::<f64, D, D>::zeros();
+            let f = |i: usize, j: usize| {
+                let mu = p.mass[j] * p.u[j];
+                if mu > 0.0 {
+                    1.0 - fc[i] / mu
+                } else {
+                    1.0
+                }
+            };
+            sys.gather(&mut out, |i, o, pr| {
+                if pr.r <= 0.0 {
+                    return;
+                }
+                let j = pr.b;
+                let rhat = pr.dx / pr.r;
+                let gi = rhat * k.dwdr(pr.r, p.h[i]);
+                let gj = rhat * k.dwdr(pr.r, p.h[j]);
+                let vij = p.vel[i] - pr.vb;
+                let uu = g1 * g1 * p.u[i] * p.u[j];
+                // P = 0 (cold gas) has no pressure force: f/P → 0 rather than 0/0
+                let inv = |x: f64| if x > 0.0 { 1.0 / x } else { 0.0 };
+                let (fi, fj) = (f(i, j) * inv(p.pressure[i]), f(j, i) * inv(p.pressure[j]));
+                let mut visc = base;
+                let a = 0.5 * (p.alpha[i] + p.alpha[j]);
+                visc.c_l *= a;
+                visc.c_q *= a;
+                let (qi, qj) = super::crksph::viscosity::pair_q(
+                    &visc,
+                    &pr.dx,
+                    &vij,
+                    &zero,
+                    &zero,
+                    (p.h[i], p.rho[i], p.sound_speed[i]),
+                    (p.h[j], p.rho[j], p.sound_speed[j]),
+                );
+                let gsum = gi + gj;
+                let rho_sum = p.rho[i] + p.rho[j];
+                let q = gsum * (0.5 * (qi / p.rho[i] + qj / p.rho[j]) / rho_sum);
+                let m_j = p.mass[j];
+                o.acc -= (gi * (uu * fi) + gj * (uu * fj) + q) * m_j;
+                o.dudt += m_j * (uu * fi * vij.dot(&gi) + 0.5 * vij.dot(&q));
+                let w = vij.dot(&rhat);
+                let vs = p.sound_speed[i] + p.sound_speed[j] - 3.0 * w;
+                let psum = p.pressure[i] + p.pressure[j];
+                if alpha_c > 0.0 && vs > 0.0 && psum > 0.0 {
+                    o.dudt += alpha_c * m_j * a * vs * (p.u[i] - p.u[j])
+                        * ((p.pressure[i] - p.pressure[j]).abs() / psum)
+                        * rhat.dot(&gsum)
+                        / rho_sum;
+                }
+                o.q_max = o.q_max.max(qi);
+                o.approach = o.approach.max(-w);
+            });
+        }
+        let eta = sys.eta;
+        let p = &sys.particles;
+        let vsig: Vec<f64> = (0..n)
+            .map(|i| {
+                let o = &out[i];
+                let s = p.sound_speed[i]
+                    .max((o.q_max.max(0.0) / p.rho[i]).sqrt())
+                    .max(o.approach);
+                (eta * s).max(p.h[i] * p.div_v[i].abs())
+            })
+            .collect();
+        sys.store_derivatives(t0, |i| (out[i].acc, out[i].dudt, vsig[i]));
+        Ok(())
+    }
+
+    fn refresh(&mut self, sys: &mut System<D>) {
+        self.state(sys);
+    }
+
+    fn end_step(&mut self, sys: &mut System<D>, dt: f64) {
+        if let Some(cd) = &self.cullen {
+            cd.end_step(sys, dt);
+        }
+    }
+}
