@@ -43,3 +43,36 @@ fn sod_1d_standard_sph_l1_density() {
         .count();
     assert_eq!(rows as u64, s.steps + 3);
 }
+
+#[test]
+fn sod_table_of_every_scheme() {
+    // One Sod setup (models/sod.toml: 720 equal-mass particles, γ = 1.4, t = 0.15) for every
+    // preset, each with its own kernel and integrator (`Case::with_scheme`; the foundation's
+    // standard SPH row keeps the case's conductivity, rpSPH and F1 their model files).
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
+    let sod = Case::load(&dir.join("sod.toml")).unwrap();
+    // (row, case, largest L1(ρ) allowed: the measured value with ~20 % headroom)
+    let rows: Vec<(&str, Case, f64)> = vec![
+        ("standard", sod.clone(), 3.0e-3),
+        ("rpsph", Case::load(&dir.join("sod-rpsph.toml")).unwrap(), 5.3e-3),
+        ("rosswog-f1", Case::load(&dir.join("sod-rosswog-f1.toml")).unwrap(), 2.4e-3),
+        ("rosswog-f4", sod.with_scheme("rosswog-f4").unwrap(), 3.9e-3),
+        ("crksph", sod.with_scheme("crksph").unwrap(), 1.6e-3),
+        ("compsph", sod.with_scheme("compsph").unwrap(), 2.7e-3),
+        ("compsph-cullen", sod.with_scheme("compsph-cullen").unwrap(), 3.7e-3),
+        ("psph", sod.with_scheme("psph").unwrap(), 4.2e-3),
+    ];
+    println!("| scheme | L1(ρ) | L1(v) | L1(P) | steps | energy change |");
+    println!("|---|---|---|---|---|---|");
+    for (name, case, bound) in rows {
+        let out = tempfile::tempdir().unwrap();
+        let s = run_case(&case, out.path(), &mut |_| {}).unwrap();
+        let e = s.shock_tube.unwrap();
+        let de = (s.last.total_energy - s.initial.total_energy) / s.initial.total_energy;
+        println!(
+            "| {name} | {:.3e} | {:.3e} | {:.3e} | {} | {de:.1e} |",
+            e.l1_density, e.l1_velocity, e.l1_pressure, s.steps
+        );
+        assert!(e.l1_density < bound, "{name}: L1(ρ) {}", e.l1_density);
+    }
+}

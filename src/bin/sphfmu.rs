@@ -53,6 +53,10 @@ enum Command {
         /// Worker threads (default: all cores)
         #[arg(long)]
         threads: Option<usize>,
+        /// Run with this scheme preset instead of the case's (standard, rpsph, rosswog-f1..f4,
+        /// crksph, compsph, compsph-cullen, psph), with the preset's kernel and integrator
+        #[arg(long)]
+        scheme: Option<String>,
     },
     /// Validate a case file without running it.
     Check {
@@ -155,11 +159,16 @@ fn main() -> ExitCode {
             out,
             quiet,
             threads,
+            scheme,
         } => {
             if let Err(e) = set_threads(threads) {
                 return fail(2, e);
             }
             let c = match Case::load(&case) {
+                Ok(c) => c,
+                Err(e) => return fail(2, e),
+            };
+            let c = match scheme.map(|s| c.with_scheme(&s)).unwrap_or(Ok(c)) {
                 Ok(c) => c,
                 Err(e) => return fail(2, e),
             };

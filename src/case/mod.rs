@@ -619,6 +619,28 @@ impl Case {
         }
     }
 
+    /// The same case run with another scheme preset (`name` as in `[scheme] name = ...`, with
+    /// its default parameters): the case's kernel choice, η, integrator and Courant factor
+    /// are dropped so the scheme's own apply (its paper's setup); h_max and everything else stay.
+    pub fn with_scheme(&self, name: &str) -> Result<Case, CaseError> {
+        let scheme: SchemeConfig = toml::from_str(&format!("name = {:?}", name)).map_err(|e| {
+            CaseError(format!(
+                "scheme: unknown preset {name:?} ({})",
+                one_line(e.message())
+            ))
+        })?;
+        let mut case = self.clone();
+        case.scheme = scheme;
+        case.kernel = KernelConfig {
+            h_max: self.kernel.h_max,
+            ..KernelConfig::default()
+        };
+        case.time.integrator = None;
+        case.time.cfl = None;
+        case.validate()?;
+        Ok(case)
+    }
+
     /// Build the simulation (particles, first evaluation) in dimension D.
     pub fn build<const D: usize>(&self) -> Result<Simulation<D>, CaseError> {
         let sys = self.system::<D>()?;
