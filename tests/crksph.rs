@@ -9,7 +9,12 @@ use sphfmu::runner::run_case;
 use std::path::Path;
 
 fn model(name: &str) -> Case {
-    Case::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("models").join(name)).unwrap()
+    Case::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("models")
+            .join(name),
+    )
+    .unwrap()
 }
 
 #[test]
@@ -90,7 +95,11 @@ fn noh_2d_reaches_the_post_shock_density() {
     );
     // measured 15.69 and 0.2025; the issue: within 10 % of 16, shock at 0.2
     assert!((r.post_shock_density / 16.0 - 1.0).abs() < 0.10);
-    assert!((r.shock_radius - 0.2).abs() < 0.01, "shock at {}", r.shock_radius);
+    assert!(
+        (r.shock_radius - 0.2).abs() < 0.01,
+        "shock at {}",
+        r.shock_radius
+    );
 }
 
 /// The Saitoh–Makino square: ρ = 4 in [1/4, 3/4]², 1 around it, P = 1, equal spacing on one
@@ -157,7 +166,10 @@ fn hydrostatic_square_keeps_its_shape_and_exact_density() {
         moved * 48.0
     );
     // measured: spread 3.3e-13, ratio error 8.1e-13, displacement 8e-13 spacings
-    assert!(s1 < 1e-12 && r1 < 1e-12, "density spread {s1:e}, ratio {r1:e}");
+    assert!(
+        s1 < 1e-12 && r1 < 1e-12,
+        "density spread {s1:e}, ratio {r1:e}"
+    );
     assert!(moved < 1e-6 / 48.0, "a particle moved {moved:e}");
 }
 
@@ -218,7 +230,10 @@ fn acoustic_wave_converges_at_second_order() {
     let ns = [32, 64, 128, 256];
     let errs: Vec<f64> = ns.iter().map(|&n| acoustic_l1("crksph", n, 5.0)).collect();
     let p = order(&ns, &errs);
-    let std_errs: Vec<f64> = ns.iter().map(|&n| acoustic_l1("standard", n, 5.0)).collect();
+    let std_errs: Vec<f64> = ns
+        .iter()
+        .map(|&n| acoustic_l1("standard", n, 5.0))
+        .collect();
     let p_std = order(&ns, &std_errs);
     println!("acoustic wave, t = 5, N = {ns:?}");
     println!("  CRKSPH   L1(ρ) = {errs:?}, order {p:.2}");

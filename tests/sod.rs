@@ -54,12 +54,24 @@ fn sod_table_of_every_scheme() {
     // (row, case, largest L1(ρ) allowed: the measured value with ~20 % headroom)
     let rows: Vec<(&str, Case, f64)> = vec![
         ("standard", sod.clone(), 3.0e-3),
-        ("rpsph", Case::load(&dir.join("sod-rpsph.toml")).unwrap(), 5.3e-3),
-        ("rosswog-f1", Case::load(&dir.join("sod-rosswog-f1.toml")).unwrap(), 2.4e-3),
+        (
+            "rpsph",
+            Case::load(&dir.join("sod-rpsph.toml")).unwrap(),
+            5.3e-3,
+        ),
+        (
+            "rosswog-f1",
+            Case::load(&dir.join("sod-rosswog-f1.toml")).unwrap(),
+            2.4e-3,
+        ),
         ("rosswog-f4", sod.with_scheme("rosswog-f4").unwrap(), 3.9e-3),
         ("crksph", sod.with_scheme("crksph").unwrap(), 1.6e-3),
         ("compsph", sod.with_scheme("compsph").unwrap(), 2.7e-3),
-        ("compsph-cullen", sod.with_scheme("compsph-cullen").unwrap(), 3.7e-3),
+        (
+            "compsph-cullen",
+            sod.with_scheme("compsph-cullen").unwrap(),
+            3.7e-3,
+        ),
         ("psph", sod.with_scheme("psph").unwrap(), 4.2e-3),
     ];
     println!("| scheme | L1(ρ) | L1(v) | L1(P) | steps | energy change |");

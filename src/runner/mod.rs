@@ -288,4 +288,3 @@ fn run_dim<const D: usize>(
     .map_err(|e| io_err(&path, e))?;
     Ok(summary)
 }
-

@@ -46,7 +46,7 @@ pub fn entropy_weight(du_ij: f64, s_i: Option<f64>, s_j: Option<f64>) -> f64 {
     }
     let (smin, smax) = (si.abs().min(sj.abs()), si.abs().max(sj.abs()));
     let sum = smin + smax;
-    if !(sum > 0.0) {
+    if sum.is_nan() || sum <= 0.0 {
         return 0.5;
     }
     let lower_share = if (du_ij >= 0.0) == (si >= sj) {

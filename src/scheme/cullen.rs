@@ -124,7 +124,10 @@ impl CullenDehnen {
                 } else {
                     0.0
                 };
-                o.1 = f64::max(o.1, 0.5 * (p.sound_speed[i] + p.sound_speed[j]) - w.min(0.0));
+                o.1 = f64::max(
+                    o.1,
+                    0.5 * (p.sound_speed[i] + p.sound_speed[j]) - w.min(0.0),
+                );
             });
         }
         let p = &mut sys.particles;
@@ -139,7 +142,7 @@ impl CullenDehnen {
 
     /// Evolve α0 over the step just taken (F.5, F.6) and set α (F.3).
     pub fn end_step<const D: usize>(&self, sys: &mut System<D>, dt: f64) {
-        if !(dt > 0.0) {
+        if dt.is_nan() || dt <= 0.0 {
             return;
         }
         let c = self.params;

@@ -239,7 +239,11 @@ impl<const D: usize> Scheme<D> for Psph {
                 let vs = p.sound_speed[i] + p.sound_speed[j] - 3.0 * w;
                 let psum = p.pressure[i] + p.pressure[j];
                 if alpha_c > 0.0 && vs > 0.0 && psum > 0.0 {
-                    o.dudt += alpha_c * m_j * a * vs * (p.u[i] - p.u[j])
+                    o.dudt += alpha_c
+                        * m_j
+                        * a
+                        * vs
+                        * (p.u[i] - p.u[j])
                         * ((p.pressure[i] - p.pressure[j]).abs() / psum)
                         * rhat.dot(&gsum)
                         / rho_sum;

@@ -121,8 +121,11 @@ pub fn radial_errors(
 ) -> RadialErrors {
     let rs = exact.shock_radius();
     let sel: Vec<&(f64, f64)> = samples.iter().filter(|s| s.0 < r_max).collect();
-    let l1 =
-        sel.iter().map(|&&(r, rho)| (rho - exact.at(r).rho).abs()).sum::<f64>() / sel.len().max(1) as f64;
+    let l1 = sel
+        .iter()
+        .map(|&&(r, rho)| (rho - exact.at(r).rho).abs())
+        .sum::<f64>()
+        / sel.len().max(1) as f64;
     // mean over the particles in [0.3, 0.8] r_s, measured and exact at the same radii
     let post: Vec<(f64, f64)> = samples
         .iter()

@@ -103,9 +103,7 @@ pub fn pair_kernels<const D: usize>(sys: &System<D>) -> Vec<PairKernel<D>> {
 
 /// [`pair_kernels`] and the volumes V_i = 1/Σ_j W(x_ij, h_i) (eq 75, self included) from the
 /// same kernel evaluations.
-pub fn pair_kernels_and_volumes<const D: usize>(
-    sys: &System<D>,
-) -> (Vec<PairKernel<D>>, Vec<f64>) {
+pub fn pair_kernels_and_volumes<const D: usize>(sys: &System<D>) -> (Vec<PairKernel<D>>, Vec<f64>) {
     let p = &sys.particles;
     let k = &sys.kernel;
     let mut out = vec![(0.0, Vector::<D>::zeros()); sys.neighbours.total_pairs()];
