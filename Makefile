@@ -43,5 +43,11 @@ bench: build
 bench-peer: build
 	tools/bench_peer.sh
 
+# Heavy verification runs: the ignored tests (the paper-resolution hydrostatic square) and
+# the CRKSPH paper's Noh and Sedov with each of its schemes (tools/verify_schemes.sh).
+verify: build
+	$(CARGO) test --release -- --ignored --nocapture
+	mkdir -p target/verify && tools/verify_schemes.sh | tee target/verify/table.md
+
 clean:
 	$(CARGO) clean
