@@ -4,6 +4,7 @@
 //! ([`case`]) becomes a [`sim::Simulation`]; the simulation steps; the faces read its outputs.
 
 pub mod bench;
+pub mod boundary;
 pub mod case;
 pub mod domain;
 pub mod eos;
