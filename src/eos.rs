@@ -83,6 +83,32 @@ impl EosConfig {
 }
 
 impl EosConfig {
+    /// The density giving pressure P at specific energy u (the inverse of `pressure`), for wall
+    /// particles whose pressure comes from the wall condition; `None` if no positive density
+    /// does (P below the Tait floor, or u ≤ 0 for a gas).
+    pub fn density_at(&self, p: f64, u: f64) -> Option<f64> {
+        let rho = match *self {
+            EosConfig::IdealGas { gamma } => p / ((gamma - 1.0) * u),
+            EosConfig::StiffenedGas { gamma, p_inf } => (p + gamma * p_inf) / ((gamma - 1.0) * u),
+            EosConfig::Isothermal { sound_speed } => p / (sound_speed * sound_speed),
+            EosConfig::Tait {
+                rho0,
+                sound_speed,
+                gamma,
+                background_pressure,
+            } => {
+                let b = rho0 * sound_speed * sound_speed / gamma;
+                let r = (p - background_pressure) / b + 1.0;
+                if r > 0.0 {
+                    rho0 * r.powf(1.0 / gamma)
+                } else {
+                    f64::NAN
+                }
+            }
+        };
+        (rho.is_finite() && rho > 0.0).then_some(rho)
+    }
+
     /// Entropy proxy s = (P + P∞)/ρ^γ for the compatible energy split's weights (CRKSPH spec
     /// §5, eqs 62–63); `None` for the barotropic laws, whose split is then even (f = ½).
     #[inline]

@@ -26,6 +26,11 @@ pub struct Particles<const D: usize> {
     pub id: Vec<u32>,
     /// Frozen particles take part in every sum but never move (boundary layers).
     pub frozen: Vec<bool>,
+    /// 0 for fluid; b + 1 for a wall particle of body b (moved by the body's kinematics, its
+    /// pressure from the wall condition, see `boundary::bodies`).
+    pub body: Vec<u16>,
+    /// Position at t = 0 (wall particles: their place in the body frame).
+    pub rest: Vec<Vector<D>>,
     /// dv/dt from the latest evaluation.
     pub acc: Vec<Vector<D>>,
     /// du/dt from the latest evaluation.
@@ -66,6 +71,8 @@ impl<const D: usize> Particles<D> {
         self.material.push(mat);
         self.id.push(id);
         self.frozen.push(false);
+        self.body.push(0);
+        self.rest.push(x);
         self.acc.push(Vector::zeros());
         self.dudt.push(0.0);
         self.omega.push(1.0);
@@ -110,6 +117,8 @@ impl<const D: usize> Particles<D> {
         ap(&mut self.material, perm);
         ap(&mut self.id, perm);
         ap(&mut self.frozen, perm);
+        ap(&mut self.body, perm);
+        ap(&mut self.rest, perm);
         ap(&mut self.acc, perm);
         ap(&mut self.dudt, perm);
         ap(&mut self.omega, perm);

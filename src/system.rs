@@ -72,6 +72,8 @@ pub struct System<const D: usize> {
     /// Working list for the current positions and h (no skin).
     pub neighbours: NeighbourList,
     pub stats: EvalStats,
+    /// Rigid bodies made of wall particles (`particles.body`), see `boundary::bodies`.
+    pub bodies: Vec<crate::boundary::bodies::Body<D>>,
 }
 
 /// A neighbour list with a skin, the positions and radii it was built for.
@@ -152,7 +154,8 @@ impl<const D: usize> System<D> {
             .collect()
     }
 
-    /// The working list: the master list cut to `max(2h_a, 2h_b)` once h is final.
+    /// The working list: the master list cut to `max(2h_a, 2h_b)` once h is final, without
+    /// wall–wall pairs (no sum or force needs them).
     pub fn compact_neighbours(&mut self) {
         let t0 = std::time::Instant::now();
         let p = &self.particles;
@@ -160,6 +163,9 @@ impl<const D: usize> System<D> {
         let k = &self.kernel;
         self.neighbours = self.verlet.list.filtered(|a, e| {
             let (b, code) = unpack(e);
+            if p.body[a] != 0 && p.body[b] != 0 {
+                return false;
+            }
             let r = k.radius(p.h[a]).max(k.radius(p.h[b]));
             dom.separation(&p.pos[a], &p.pos[b], code).norm_squared() < r * r
         });
@@ -307,7 +313,14 @@ impl<const D: usize> System<D> {
             });
     }
 
-    /// P and c_s from the EOS for every particle.
+    /// After an evaluation: frozen particles keep still, wall particles record their body's
+    /// load and take its rigid motion.
+    pub fn hold_constrained(&mut self) {
+        self.particles.hold_frozen();
+        self.hold_walls();
+    }
+
+    /// P and c_s from the EOS for every particle, then the wall condition on wall particles.
     pub fn update_eos(&mut self) {
         let eos = self.eos;
         let p = &mut self.particles;
@@ -319,6 +332,7 @@ impl<const D: usize> System<D> {
                 *pr = eos.pressure(rho, u);
                 *cs = eos.sound_speed(rho, u);
             });
+        self.apply_wall_condition();
     }
 
     /// Index of the first particle with a non-finite evolved or derived field, if any.

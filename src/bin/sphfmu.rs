@@ -231,6 +231,12 @@ fn main() -> ExitCode {
                     if let Some(l1) = s.vortex_l1 {
                         println!("L1(v) against the stationary Gresho vortex: {l1:.4e}");
                     }
+                    for b in &s.bodies {
+                        println!(
+                            "body {:?}: force [{:.6e}, {:.6e}, {:.6e}], torque [{:.6e}, {:.6e}, {:.6e}]",
+                            b.name, b.force[0], b.force[1], b.force[2], b.torque[0], b.torque[1], b.torque[2]
+                        );
+                    }
                     if let Some(r) = s.radial {
                         println!(
                             "against the exact solution: shock at r = {:.4} (exact {:.4}), post-shock density {:.3} (exact {:.3}), L1(rho) {:.4e} ({} particles)",

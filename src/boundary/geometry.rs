@@ -7,9 +7,9 @@
 use crate::particles::Vector;
 use serde::{Deserialize, Serialize};
 
-/// `[[body]]` shape in case files.
+/// `shape = { type = ..., ... }` of a `[[body]]` in case files.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "shape", rename_all = "kebab-case", deny_unknown_fields)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum Shape {
     /// Open-top tank: the fluid space is the box [min, max]; walls on every face but the top
     /// (the last axis' upper face), rising to the top of the box.

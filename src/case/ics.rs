@@ -162,6 +162,22 @@ fn state_of<const D: usize>(case: &Case, r: &Region, x: &Vector<D>) -> State<D> 
         }
     }
     let mut u = u;
+    let mut rho = rho;
+    if r.hydrostatic {
+        if let (Some(g), Some(p0)) = (&case.gravity, r.pressure) {
+            let g = Vector::<D>::from_iterator(g.iter().cloned());
+            let (lo, hi) = case.region_box(r);
+            // depth below the highest point of the region's box, measured along g
+            let top: f64 = (0..D).map(|k| (g[k] * lo[k]).min(g[k] * hi[k])).sum();
+            let depth = (g.dot(x) - top) / g.norm().max(1e-300);
+            let p = p0 + r.density * g.norm() * depth.max(0.0);
+            rho = case.eos.density_at(p, u).unwrap_or(rho);
+            u = match case.eos {
+                crate::eos::EosConfig::Tait { .. } | crate::eos::EosConfig::Isothermal { .. } => u,
+                _ => case.eos.internal_energy(rho, p),
+            };
+        }
+    }
     if let Some(g) = &r.gresho {
         let v = g.velocity(x[0], x[1]);
         vel[0] += v[0];
@@ -177,7 +193,7 @@ pub fn generate_particles<const D: usize>(
     case: &Case,
     domain: &Domain<D>,
     eta: f64,
-) -> Result<Particles<D>, CaseError> {
+) -> Result<(Particles<D>, Vec<crate::boundary::bodies::Body<D>>), CaseError> {
     let mut p = Particles::<D>::default();
     let mut spacing_of = Vec::new();
     for (ri, r) in case.regions.iter().enumerate() {
@@ -206,7 +222,9 @@ pub fn generate_particles<const D: usize>(
                 continue;
             }
             let s = state_of(case, r, &x);
-            p.push(mass, x, s.vel, s.u, s.rho, h, r.material);
+            // equal volumes: a hydrostatic region's masses follow its density
+            let m = if r.hydrostatic { s.rho * vol } else { mass };
+            p.push(m, x, s.vel, s.u, s.rho, h, r.material);
             spacing_of.push(vol.powf(1.0 / D as f64));
         }
     }
@@ -275,6 +293,8 @@ pub fn generate_particles<const D: usize>(
             .expect("particles exist");
         p.u[nearest] += b.energy / p.mass[nearest];
     }
+    // bodies after every fluid-placement step (the perturbation moves fluid particles only)
+    let bodies_later = !case.bodies.is_empty();
     if let Some(pert) = &case.perturbation {
         let mut rng = SplitMix64::new(pert.seed);
         for (x, &spacing) in p.pos.iter_mut().zip(&spacing_of) {
@@ -285,5 +305,13 @@ pub fn generate_particles<const D: usize>(
             domain.enforce(x, &mut v);
         }
     }
-    Ok(p)
+    let bodies = if bodies_later {
+        // align the walls with the first region's lattice (cell centres from its lower corner)
+        let lo0 = case.regions.first().map(|r| case.region_box(r).0);
+        let origin = Vector::<D>::from_fn(|k, _| lo0.as_ref().map_or(domain.lo[k], |l| l[k]));
+        super::bodies::add_bodies(case, &mut p, &spacing_of, eta, &origin)?
+    } else {
+        Vec::new()
+    };
+    Ok((p, bodies))
 }

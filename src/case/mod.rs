@@ -1,10 +1,12 @@
 //! Case files (`models/*.toml`): a scenario as data. Parsed with serde (unknown keys are
 //! errors), then validated range by range; every error names the key and the allowed range.
 
+mod bodies;
 mod checks;
 mod glass;
 mod ics;
 
+pub use bodies::BodyConfig;
 pub use checks::{Blast, Verify};
 pub use glass::GlassConfig;
 pub use ics::generate_particles;
@@ -68,6 +70,9 @@ pub struct Case {
     /// Point energy deposit (Sedov–Taylor blast).
     #[serde(default)]
     pub blast: Option<Blast>,
+    /// Rigid boundary bodies made of wall particles.
+    #[serde(default, rename = "body")]
+    pub bodies: Vec<BodyConfig>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -219,6 +224,10 @@ pub struct Region {
     pub gresho: Option<crate::verify::vortex::Gresho>,
     #[serde(default)]
     pub material: u16,
+    /// Add the hydrostatic pressure ρ|g|·depth below the region's top (against `gravity`) to
+    /// `pressure`, with the density from the EOS at that pressure (particle masses follow).
+    #[serde(default)]
+    pub hydrostatic: bool,
 }
 
 fn default_shape() -> Shape {
@@ -470,11 +479,21 @@ impl Case {
         if let Some(b) = &self.blast {
             b.validate(self)?;
         }
+        for (i, b) in self.bodies.iter().enumerate() {
+            b.validate(i, self)?;
+        }
         Ok(())
     }
 
     fn validate_region(&self, i: usize, r: &Region) -> Result<(), CaseError> {
         let key = |s: &str| format!("region[{i}].{s}");
+        if r.hydrostatic && (self.gravity.is_none() || r.pressure.is_none()) {
+            return Err(CaseError(format!(
+                "{}: needs `gravity` and {} (the pressure at the region's top)",
+                key("hydrostatic"),
+                key("pressure")
+            )));
+        }
         let pos = |k: &str, v: f64| -> Result<(), CaseError> {
             if v.is_finite() && v > 0.0 {
                 Ok(())
@@ -676,7 +695,7 @@ impl Case {
         let domain = Domain { lo, hi, kind };
         let eta = self.eta()?;
         let kernel = DimKernel::<D>::new(self.kernel()?);
-        let particles = generate_particles::<D>(self, &domain, eta)?;
+        let (particles, bodies) = generate_particles::<D>(self, &domain, eta)?;
         let extent = (0..D).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
         let h_max = self.kernel.h_max.unwrap_or(0.25 * extent);
         // Minimum image needs the search radius below half of every periodic side.
@@ -719,6 +738,7 @@ impl Case {
             verlet: Default::default(),
             neighbours: Default::default(),
             stats: Default::default(),
+            bodies,
         })
     }
 }

@@ -150,7 +150,7 @@ impl<const D: usize> Integrator<D> {
                 }
                 sys.predict_h(dt);
                 scheme.evaluate(sys)?;
-                sys.particles.hold_frozen();
+                sys.hold_constrained();
                 let p = &mut sys.particles;
                 let (sv, su) = (&self.saved.vel, &self.saved.u);
                 p.vel
@@ -169,16 +169,16 @@ impl<const D: usize> Integrator<D> {
                 combine(sys, &s0, 0.0, 1.0, dt);
                 sys.predict_h(dt);
                 scheme.evaluate(sys)?;
-                sys.particles.hold_frozen();
+                sys.hold_constrained();
                 combine(sys, &s0, 0.75, 0.25, dt);
                 sys.predict_h(-0.5 * dt);
                 scheme.evaluate(sys)?;
-                sys.particles.hold_frozen();
+                sys.hold_constrained();
                 combine(sys, &s0, 1.0 / 3.0, 2.0 / 3.0, dt);
                 enforce_boundaries(sys);
                 sys.predict_h(0.5 * dt);
                 scheme.evaluate(sys)?;
-                sys.particles.hold_frozen();
+                sys.hold_constrained();
                 self.saved = s0;
             }
             IntegratorKind::CrkRk2 => {
@@ -191,7 +191,7 @@ impl<const D: usize> Integrator<D> {
                 combine(sys, &s0, 0.0, 1.0, 0.5 * dt);
                 sys.predict_h(0.5 * dt);
                 scheme.evaluate(sys)?;
-                sys.particles.hold_frozen();
+                sys.hold_constrained();
                 // full step from the start state with the midpoint derivatives
                 {
                     let p = &mut sys.particles;
@@ -219,7 +219,7 @@ impl<const D: usize> Integrator<D> {
                 enforce_boundaries(sys);
                 sys.predict_h(0.5 * dt);
                 scheme.refresh(sys);
-                sys.particles.hold_frozen();
+                sys.hold_constrained();
                 self.saved = s0;
             }
         }

@@ -70,6 +70,16 @@ pub struct Progress {
     pub rate: f64,
 }
 
+/// Load of the fluid on one body.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct BodyLoad {
+    pub name: String,
+    /// Force (x, y, z).
+    pub force: Vec<f64>,
+    /// Torque about the body's reference point (x, y, z).
+    pub torque: Vec<f64>,
+}
+
 /// What a finished run reports.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct RunSummary {
@@ -88,6 +98,8 @@ pub struct RunSummary {
     pub vortex_l1: Option<f64>,
     /// Sedov / Noh: L1(ρ), shock position and post-shock density against the exact solution.
     pub radial: Option<RadialErrors>,
+    /// Force and torque of the fluid on each body at the end (latest evaluation).
+    pub bodies: Vec<BodyLoad>,
     pub plot: Option<PathBuf>,
     /// Wall-clock seconds per phase: neighbour lists, density/h, gradients, forces.
     pub phase_seconds: [f64; 4],
@@ -255,6 +267,18 @@ fn run_dim<const D: usize>(
         shock_tube: None,
         vortex_l1: None,
         radial: None,
+        bodies: sim
+            .sys
+            .bodies
+            .iter()
+            .map(|b| BodyLoad {
+                name: b.name.clone(),
+                force: (0..3)
+                    .map(|k| if k < D { b.force[k] } else { 0.0 })
+                    .collect(),
+                torque: b.torque.to_vec(),
+            })
+            .collect(),
         plot: None,
         phase_seconds: {
             let st = &sim.sys.stats;

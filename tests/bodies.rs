@@ -1,0 +1,102 @@
+//! Boundary bodies (issue 5, first part): wall particles with the Adami et al. (2012) wall
+//! condition carry a liquid at rest; the load on the body is the reaction of the pair forces.
+
+use sphfmu::case::Case;
+use std::path::Path;
+
+fn closed_tank() -> Case {
+    Case::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("models/closed-tank2d.toml")).unwrap()
+}
+
+#[test]
+fn a_closed_tank_carries_the_weight_of_its_water() {
+    let case = closed_tank();
+    let mut sim = case.build::<2>().unwrap();
+    let weight = sim.diagnostics().mass * 9.81;
+    let n_fluid = (0..sim.sys.particles.len())
+        .filter(|&i| sim.sys.particles.body[i] == 0)
+        .count();
+    // time averages over t ∈ [0.5, 1]: the weakly damped acoustic oscillation (±5 % of the
+    // force, period ≈ 4H/c) averages out
+    let (mut f_sum, mut dp_sum, mut samples) = (0.0, 0.0, 0usize);
+    let dx = 0.02;
+    while sim.time < 1.0 {
+        sim.step(1.0 - sim.time).unwrap();
+        if sim.time < 0.5 {
+            continue;
+        }
+        let p = &sim.sys.particles;
+        let layer = |y: f64| {
+            let v: Vec<f64> = (0..p.len())
+                .filter(|&i| {
+                    p.body[i] != 0
+                        && (p.pos[i][1] - y).abs() < 1e-9
+                        && p.pos[i][0] > 0.2
+                        && p.pos[i][0] < 0.8
+                })
+                .map(|i| p.pressure[i])
+                .collect();
+            v.iter().sum::<f64>() / v.len() as f64
+        };
+        f_sum += -sim.sys.bodies[0].force[1];
+        dp_sum += layer(-0.5 * dx) - layer(0.5 + 0.5 * dx);
+        samples += 1;
+    }
+    let force = f_sum / samples as f64;
+    let dp = dp_sum / samples as f64;
+    // exact: the first wall layers sit Δx/2 outside the box, H + Δx = 0.52 apart; mean ρ of
+    // the Tait water between 2e4 and 2.5e4 Pa is 1032.6 kg/m³
+    let dp_exact = 1032.6 * 9.81 * 0.52;
+    println!(
+        "closed tank: vertical force / weight {:.4}, floor − lid wall pressure {dp:.1} Pa (exact {dp_exact:.1}), {samples} samples",
+        force / weight
+    );
+    // measured: force 0.9995 of the weight, pressure difference 1.5 % low; issue: 1 % and 2 %
+    assert!(
+        (force / weight - 1.0).abs() < 0.01,
+        "force/weight {}",
+        force / weight
+    );
+    assert!((dp / dp_exact - 1.0).abs() < 0.02, "Δp {dp} vs {dp_exact}");
+    // nothing leaves the box
+    let p = &sim.sys.particles;
+    let inside = (0..p.len())
+        .filter(|&i| p.body[i] == 0)
+        .all(|i| (0..2).all(|k| p.pos[i][k] > 0.0 && p.pos[i][k] < [1.0, 0.5][k]));
+    assert!(inside && n_fluid == 1250);
+}
+
+#[test]
+fn bad_bodies_are_clear_errors() {
+    let base = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("models/closed-tank2d.toml"),
+    )
+    .unwrap();
+    let cases = [
+        // a block in the middle of the water
+        (
+            r#"shape = { type = "block", min = [0.4, 0.1], max = [0.6, 0.2] }"#,
+            "body[0]: overlaps the fluid",
+        ),
+        (
+            r#"shape = { type = "closed-box", min = [0.0, 0.0], max = [1.0, 0.0] }"#,
+            "body[0].max: must exceed min",
+        ),
+        (
+            r#"shape = { type = "closed-box", min = [0.0, 0.0], max = [1.0, 0.5] }
+motion = { type = "sinusoid", amplitude = [0.01, nan], frequency = 1.0 }"#,
+            "body[0].motion.amplitude: entries must be finite",
+        ),
+    ];
+    for (shape, msg) in cases {
+        let text = base.replace(
+            r#"shape = { type = "closed-box", min = [0.0, 0.0], max = [1.0, 0.5] }"#,
+            shape,
+        );
+        let err = match Case::parse(&text) {
+            Err(e) => e.0,
+            Ok(c) => c.build::<2>().err().expect("must fail").0,
+        };
+        assert!(err.contains(msg), "{err}");
+    }
+}
