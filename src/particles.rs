@@ -35,6 +35,8 @@ pub struct Particles<const D: usize> {
     pub acc: Vec<Vector<D>>,
     /// du/dt from the latest evaluation.
     pub dudt: Vec<f64>,
+    /// dρ/dt (schemes that evolve the density by the continuity equation).
+    pub drhodt: Vec<f64>,
     /// Grad-h correction Ω (1 where a scheme has no grad-h terms).
     pub omega: Vec<f64>,
     /// Velocity divergence and |curl| (for switches and diagnostics).
@@ -75,6 +77,7 @@ impl<const D: usize> Particles<D> {
         self.rest.push(x);
         self.acc.push(Vector::zeros());
         self.dudt.push(0.0);
+        self.drhodt.push(0.0);
         self.omega.push(1.0);
         self.div_v.push(0.0);
         self.curl_v.push(0.0);
@@ -121,6 +124,7 @@ impl<const D: usize> Particles<D> {
         ap(&mut self.rest, perm);
         ap(&mut self.acc, perm);
         ap(&mut self.dudt, perm);
+        ap(&mut self.drhodt, perm);
         ap(&mut self.omega, perm);
         ap(&mut self.div_v, perm);
         ap(&mut self.curl_v, perm);
@@ -141,6 +145,7 @@ impl<const D: usize> Particles<D> {
             if self.frozen[i] {
                 self.acc[i] = Vector::zeros();
                 self.dudt[i] = 0.0;
+                self.drhodt[i] = 0.0;
                 self.vel[i] = Vector::zeros();
             }
         }

@@ -74,6 +74,9 @@ pub struct System<const D: usize> {
     pub stats: EvalStats,
     /// Rigid bodies made of wall particles (`particles.body`), see `boundary::bodies`.
     pub bodies: Vec<crate::boundary::bodies::Body<D>>,
+    /// The scheme evolves ρ by the continuity equation (`particles.drhodt`): the integrators
+    /// advance it with x, v and u.
+    pub evolve_density: bool,
 }
 
 /// A neighbour list with a skin, the positions and radii it was built for.

@@ -123,3 +123,71 @@ fn a_slow_piston_feels_the_adiabatic_pressure() {
     // issue asks 1 % at all phases: not met yet, so this bound is the measured value + 25 %.
     assert!(worst < 0.015, "deviation {worst}");
 }
+
+/// Mean pressure of the wall particles at height y (0.2 < x < 0.8).
+fn wall_layer_pressure(sim: &sphfmu::sim::Simulation<2>, y: f64) -> f64 {
+    let p = &sim.sys.particles;
+    let v: Vec<f64> = (0..p.len())
+        .filter(|&i| {
+            p.body[i] != 0
+                && (p.pos[i][1] - y).abs() < 1e-9
+                && p.pos[i][0] > 0.2
+                && p.pos[i][0] < 0.8
+        })
+        .map(|i| p.pressure[i])
+        .collect();
+    v.iter().sum::<f64>() / v.len() as f64
+}
+
+#[test]
+fn an_open_tank_carries_its_water_and_follows_doubled_gravity() {
+    // Continuity density, free surface at P = 0 (models/tank2d.toml); gravity doubles at t = 0.5.
+    let case =
+        Case::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("models/tank2d.toml")).unwrap();
+    let mut sim = case.build::<2>().unwrap();
+    let mass = sim.diagnostics().mass;
+    let mean_rho = {
+        let p = &sim.sys.particles;
+        let f: Vec<usize> = (0..p.len()).filter(|&i| p.body[i] == 0).collect();
+        f.iter().map(|&i| p.rho[i]).sum::<f64>() / f.len() as f64
+    };
+    // (g, averaging window, Σ F/W, Σ floor pressure, samples)
+    let mut phases = [
+        (9.81, 0.1, 0.5, 0.0, 0.0, 0usize),
+        (19.62, 0.6, 1.0, 0.0, 0.0, 0),
+    ];
+    let dx = 0.02;
+    while sim.time < 1.0 {
+        if sim.time >= 0.5 && sim.sys.gravity[1] > -15.0 {
+            sim.sys.gravity[1] = -19.62;
+        }
+        sim.step(1.0 - sim.time).unwrap();
+        for ph in phases.iter_mut() {
+            if sim.time >= ph.1 && sim.time <= ph.2 {
+                ph.3 += -sim.sys.bodies[0].force[1] / (mass * ph.0);
+                ph.4 += wall_layer_pressure(&sim, -0.5 * dx);
+                ph.5 += 1;
+            }
+        }
+    }
+    for (g, t0, t1, f, pf, n) in phases {
+        let (f, pf) = (f / n as f64, pf / n as f64);
+        // the first wall layer lies Δx/2 below the floor: depth H + Δx/2
+        let exact = mean_rho * g * (0.5 + 0.5 * dx);
+        println!(
+            "open tank, g = {g}: t ∈ [{t0}, {t1}] force/weight {f:.4}, floor pressure {pf:.1} (exact {exact:.1}, {:+.2} %)",
+            100.0 * (pf / exact - 1.0)
+        );
+        // measured: force 1.0001 and 1.0039 of the weight; floor pressure +0.92 % and +0.54 %;
+        // the issue: 1 % and 2 %
+        assert!((f - 1.0).abs() < 0.01, "g = {g}: force/weight {f}");
+        assert!(
+            (pf / exact - 1.0).abs() < 0.02,
+            "g = {g}: floor pressure {pf}"
+        );
+    }
+    let p = &sim.sys.particles;
+    assert!((0..p.len())
+        .filter(|&i| p.body[i] == 0)
+        .all(|i| p.pos[i][0] > 0.0 && p.pos[i][0] < 1.0 && p.pos[i][1] > 0.0));
+}

@@ -206,6 +206,7 @@ impl<const D: usize> System<D> {
             let (_, _, a) = body.point(&p.rest[i]);
             p.acc[i] = a;
             p.dudt[i] = 0.0;
+            p.drhodt[i] = 0.0;
         }
     }
 }

@@ -739,6 +739,7 @@ impl Case {
             neighbours: Default::default(),
             stats: Default::default(),
             bodies,
+            evolve_density: false,
         })
     }
 }

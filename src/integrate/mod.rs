@@ -34,6 +34,8 @@ struct Saved<const D: usize> {
     pos: Vec<Vector<D>>,
     vel: Vec<Vector<D>>,
     u: Vec<f64>,
+    /// ρ (only when the scheme evolves it; the leapfrog keeps ρ at the half step here).
+    rho: Vec<f64>,
     /// Start-of-step entropy proxies (compatible energy update only).
     entropy: Vec<Option<f64>>,
 }
@@ -44,6 +46,9 @@ impl<const D: usize> Saved<D> {
         self.pos.clone_from(&p.pos);
         self.vel.clone_from(&p.vel);
         self.u.clone_from(&p.u);
+        if sys.evolve_density {
+            self.rho.clone_from(&p.rho);
+        }
     }
 
     fn save_entropy(&mut self, sys: &System<D>) {
@@ -81,6 +86,19 @@ fn combine<const D: usize>(sys: &mut System<D>, s0: &Saved<D>, c0: f64, c1: f64,
         });
 }
 
+/// ρ ← c0·ρ0 + c1·(ρ + dt·dρ/dt), when the scheme evolves ρ (`ρ0` = `s0`).
+fn combine_density<const D: usize>(sys: &mut System<D>, s0: &[f64], c0: f64, c1: f64, dt: f64) {
+    if !sys.evolve_density {
+        return;
+    }
+    let p = &mut sys.particles;
+    p.rho
+        .par_iter_mut()
+        .zip(p.drhodt.par_iter())
+        .enumerate()
+        .for_each(|(i, (r, d))| *r = s0[i] * c0 + (*r + d * dt) * c1);
+}
+
 fn enforce_boundaries<const D: usize>(sys: &mut System<D>) {
     let dom = sys.domain;
     let p = &mut sys.particles;
@@ -109,7 +127,17 @@ impl<const D: usize> Integrator<D> {
         match self.kind {
             IntegratorKind::Leapfrog => {
                 let half = 0.5 * dt;
-                // kick + drift; keep v_half in `saved.vel`, u_half in `saved.u`
+                // kick + drift; keep v_half in `saved.vel`, u_half in `saved.u`, ρ_half in
+                // `saved.rho`; ρ is predicted to the end of the step like u
+                if sys.evolve_density {
+                    let p = &mut sys.particles;
+                    self.saved.rho = (0..p.len())
+                        .map(|i| p.rho[i] + p.drhodt[i] * half)
+                        .collect();
+                    for i in 0..p.len() {
+                        p.rho[i] = self.saved.rho[i] + p.drhodt[i] * half;
+                    }
+                }
                 {
                     let p = &mut sys.particles;
                     self.saved.vel.resize(p.len(), Vector::zeros());
@@ -151,6 +179,12 @@ impl<const D: usize> Integrator<D> {
                 sys.predict_h(dt);
                 scheme.evaluate(sys)?;
                 sys.hold_constrained();
+                if sys.evolve_density {
+                    let p = &mut sys.particles;
+                    for i in 0..p.len() {
+                        p.rho[i] = self.saved.rho[i] + p.drhodt[i] * half;
+                    }
+                }
                 let p = &mut sys.particles;
                 let (sv, su) = (&self.saved.vel, &self.saved.u);
                 p.vel
@@ -167,14 +201,17 @@ impl<const D: usize> Integrator<D> {
                 s0.save(sys);
                 // predict_h: the stage times are t+dt, t+dt/2, t+dt.
                 combine(sys, &s0, 0.0, 1.0, dt);
+                combine_density(sys, &s0.rho, 0.0, 1.0, dt);
                 sys.predict_h(dt);
                 scheme.evaluate(sys)?;
                 sys.hold_constrained();
                 combine(sys, &s0, 0.75, 0.25, dt);
+                combine_density(sys, &s0.rho, 0.75, 0.25, dt);
                 sys.predict_h(-0.5 * dt);
                 scheme.evaluate(sys)?;
                 sys.hold_constrained();
                 combine(sys, &s0, 1.0 / 3.0, 2.0 / 3.0, dt);
+                combine_density(sys, &s0.rho, 1.0 / 3.0, 2.0 / 3.0, dt);
                 enforce_boundaries(sys);
                 sys.predict_h(0.5 * dt);
                 scheme.evaluate(sys)?;
@@ -189,6 +226,7 @@ impl<const D: usize> Integrator<D> {
                 }
                 // predictor to the midpoint with the previous (midpoint) derivatives
                 combine(sys, &s0, 0.0, 1.0, 0.5 * dt);
+                combine_density(sys, &s0.rho, 0.0, 1.0, 0.5 * dt);
                 sys.predict_h(0.5 * dt);
                 scheme.evaluate(sys)?;
                 sys.hold_constrained();
@@ -206,6 +244,12 @@ impl<const D: usize> Integrator<D> {
                             *v = s0.vel[i] + acc[i] * dt;
                             *u = s0.u[i] + dudt[i] * dt;
                         });
+                }
+                if sys.evolve_density {
+                    let p = &mut sys.particles;
+                    for i in 0..p.len() {
+                        p.rho[i] = s0.rho[i] + p.drhodt[i] * dt;
+                    }
                 }
                 if let Some(work) = scheme.pair_work() {
                     let p = &sys.particles;

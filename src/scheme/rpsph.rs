@@ -55,6 +55,7 @@ impl RpsphParams {
             conductivity: self.conductivity,
             epsilon: self.epsilon,
             cullen_dehnen: false,
+            density: super::standard::DensityMode::Summation,
         }
     }
     pub fn validate(&self) -> Result<(), String> {

@@ -35,6 +35,19 @@ pub struct StandardParams {
     /// Per-particle α from the Cullen–Dehnen switch (replaces Balsara; α and β both scale
     /// with ½(α_a + α_b), CRKSPH spec §8.2).
     pub cullen_dehnen: bool,
+    /// Density by summation (default) or evolved by the continuity equation
+    /// dρ_a/dt = Σ_b m_b v_ab·∇_a W_ab(h_a) with h_a = η (m_a/ρ_a)^{1/D} — the usual choice for
+    /// liquids with a free surface, where a summation misses the mass beyond the surface.
+    pub density: DensityMode,
+}
+
+/// How standard SPH gets ρ.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum DensityMode {
+    #[default]
+    Summation,
+    Continuity,
 }
 
 impl Default for StandardParams {
@@ -46,6 +59,7 @@ impl Default for StandardParams {
             conductivity: 0.0,
             epsilon: 0.01,
             cullen_dehnen: false,
+            density: DensityMode::Summation,
         }
     }
 }
@@ -142,6 +156,8 @@ struct ForceAcc<const D: usize> {
     acc: Vector<D>,
     dudt: f64,
     vsig: f64,
+    /// Σ_b m_b v_ab·∇_a W_ab(h_a), the continuity equation's dρ/dt
+    drho: f64,
 }
 
 impl<const D: usize> Default for ForceAcc<D> {
@@ -150,6 +166,7 @@ impl<const D: usize> Default for ForceAcc<D> {
             acc: Vector::zeros(),
             dudt: 0.0,
             vsig: 0.0,
+            drho: 0.0,
         }
     }
 }
@@ -174,6 +191,7 @@ impl<const D: usize> Scheme<D> for StandardSph {
     }
 
     fn init(&mut self, sys: &mut System<D>) {
+        sys.evolve_density = self.params.density == DensityMode::Continuity;
         self.balsara_slot = sys.particles.add_scalar_field(1.0);
         if self.params.cullen_dehnen {
             self.cullen = Some(super::cullen::CullenDehnen::init(
@@ -193,7 +211,10 @@ impl<const D: usize> Scheme<D> for StandardSph {
     }
 
     fn evaluate(&mut self, sys: &mut System<D>) -> Result<(), SchemeError> {
-        smoothing::solve_density_and_h(sys);
+        match self.params.density {
+            DensityMode::Summation => smoothing::solve_density_and_h(sys),
+            DensityMode::Continuity => continuity_state(sys),
+        }
         sys.update_eos();
         match &self.cullen {
             // the Balsara factor stays 1: the switch limits shear itself
@@ -203,6 +224,19 @@ impl<const D: usize> Scheme<D> for StandardSph {
         force_pass(sys, &self.params, self.balsara_slot, self.form);
         Ok(())
     }
+}
+
+/// With an evolved ρ: h_a = η (m_a/ρ_a)^{1/D} (walls keep theirs), Ω = 1, valid lists.
+fn continuity_state<const D: usize>(sys: &mut System<D>) {
+    let (eta, h_max) = (sys.eta, sys.h_max);
+    let p = &mut sys.particles;
+    for i in 0..p.len() {
+        if p.body[i] == 0 {
+            p.h[i] = (eta * (p.mass[i] / p.rho[i]).powf(1.0 / D as f64)).min(h_max);
+        }
+        p.omega[i] = 1.0;
+    }
+    smoothing::update_lists(sys);
 }
 
 /// Velocity divergence and |curl| (SPH estimate with grad-h:
@@ -370,8 +404,12 @@ pub(crate) fn force_pass<const D: usize>(
                 }
                 o.acc -= (mb * force) * rhat;
                 o.dudt += dudt;
+                o.drho += mb * w * fa;
             },
         );
     }
     sys.store_derivatives(t0, |a| (out[a].acc, out[a].dudt, out[a].vsig));
+    for (d, o) in sys.particles.drhodt.iter_mut().zip(&out) {
+        *d = o.drho;
+    }
 }
