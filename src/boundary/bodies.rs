@@ -36,6 +36,11 @@ pub struct Body<const D: usize> {
     pub torque: [f64; 3],
     /// Volume of one wall particle (spacing^D): its mass is ρ_w times this.
     pub particle_volume: f64,
+    /// Time integral of `force` and `torque` with the integrator's own stage weights, so the
+    /// fluid's momentum change plus the impulse on every body is the gravity impulse to
+    /// round-off.
+    pub impulse: Vector<D>,
+    pub angular_impulse: [f64; 3],
 }
 
 fn to3<const D: usize>(v: &Vector<D>) -> nalgebra::Vector3<f64> {
@@ -173,6 +178,17 @@ impl<const D: usize> System<D> {
                 p.u[w] = uw;
                 p.sound_speed[w] = c;
                 p.mass[w] = rho * self.bodies[p.body[w] as usize - 1].particle_volume;
+            }
+        }
+    }
+
+    /// Add `weight_dt` × the latest force and torque to each body's impulse (called by the
+    /// integrators with their stage weights times dt).
+    pub fn accumulate_impulse(&mut self, weight_dt: f64) {
+        for b in &mut self.bodies {
+            b.impulse += b.force * weight_dt;
+            for k in 0..3 {
+                b.angular_impulse[k] += b.torque[k] * weight_dt;
             }
         }
     }

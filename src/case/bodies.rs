@@ -138,6 +138,8 @@ pub(super) fn add_bodies<const D: usize>(
             force: Vector::zeros(),
             torque: [0.0; 3],
             particle_volume: dx.powi(D as i32),
+            impulse: Vector::zeros(),
+            angular_impulse: [0.0; 3],
         });
     }
     Ok(out)

@@ -177,8 +177,11 @@ impl<const D: usize> Integrator<D> {
                         });
                 }
                 sys.predict_h(dt);
+                // KDK: the step's impulse is ½dt (F_n + F_n+1)
+                sys.accumulate_impulse(half);
                 scheme.evaluate(sys)?;
                 sys.hold_constrained();
+                sys.accumulate_impulse(half);
                 if sys.evolve_density {
                     let p = &mut sys.particles;
                     for i in 0..p.len() {
@@ -200,16 +203,20 @@ impl<const D: usize> Integrator<D> {
                 let mut s0 = std::mem::take(&mut self.saved);
                 s0.save(sys);
                 // predict_h: the stage times are t+dt, t+dt/2, t+dt.
+                // Shu–Osher's three stages advance u0 by dt(⅙L0 + ⅙L1 + ⅔L2)
+                sys.accumulate_impulse(dt / 6.0);
                 combine(sys, &s0, 0.0, 1.0, dt);
                 combine_density(sys, &s0.rho, 0.0, 1.0, dt);
                 sys.predict_h(dt);
                 scheme.evaluate(sys)?;
                 sys.hold_constrained();
+                sys.accumulate_impulse(dt / 6.0);
                 combine(sys, &s0, 0.75, 0.25, dt);
                 combine_density(sys, &s0.rho, 0.75, 0.25, dt);
                 sys.predict_h(-0.5 * dt);
                 scheme.evaluate(sys)?;
                 sys.hold_constrained();
+                sys.accumulate_impulse(2.0 * dt / 3.0);
                 combine(sys, &s0, 1.0 / 3.0, 2.0 / 3.0, dt);
                 combine_density(sys, &s0.rho, 1.0 / 3.0, 2.0 / 3.0, dt);
                 enforce_boundaries(sys);
@@ -230,6 +237,8 @@ impl<const D: usize> Integrator<D> {
                 sys.predict_h(0.5 * dt);
                 scheme.evaluate(sys)?;
                 sys.hold_constrained();
+                // the full step uses the midpoint forces only
+                sys.accumulate_impulse(dt);
                 // full step from the start state with the midpoint derivatives
                 {
                     let p = &mut sys.particles;

@@ -78,6 +78,8 @@ pub struct BodyLoad {
     pub force: Vec<f64>,
     /// Torque about the body's reference point (x, y, z).
     pub torque: Vec<f64>,
+    /// Impulse of the fluid on the body since t = 0 (x, y, z).
+    pub impulse: Vec<f64>,
 }
 
 /// What a finished run reports.
@@ -277,6 +279,9 @@ fn run_dim<const D: usize>(
                     .map(|k| if k < D { b.force[k] } else { 0.0 })
                     .collect(),
                 torque: b.torque.to_vec(),
+                impulse: (0..3)
+                    .map(|k| if k < D { b.impulse[k] } else { 0.0 })
+                    .collect(),
             })
             .collect(),
         plot: None,
