@@ -25,21 +25,8 @@ fn a_closed_tank_carries_the_weight_of_its_water() {
         if sim.time < 0.5 {
             continue;
         }
-        let p = &sim.sys.particles;
-        let layer = |y: f64| {
-            let v: Vec<f64> = (0..p.len())
-                .filter(|&i| {
-                    p.body[i] != 0
-                        && (p.pos[i][1] - y).abs() < 1e-9
-                        && p.pos[i][0] > 0.2
-                        && p.pos[i][0] < 0.8
-                })
-                .map(|i| p.pressure[i])
-                .collect();
-            v.iter().sum::<f64>() / v.len() as f64
-        };
         f_sum += -sim.sys.bodies[0].force[1];
-        dp_sum += layer(-0.5 * dx) - layer(0.5 + 0.5 * dx);
+        dp_sum += wall_layer_pressure(&sim, -0.5 * dx) - wall_layer_pressure(&sim, 0.5 + 0.5 * dx);
         samples += 1;
     }
     let force = f_sum / samples as f64;

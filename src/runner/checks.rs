@@ -130,19 +130,9 @@ fn verify_radial<const D: usize>(
         let s = exact.at(r);
         s.p / ((gamma - 1.0) * s.rho)
     });
-    let col = |f: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> {
-        (0..p.len()).map(|i| (radius(i), f(i))).collect()
-    };
     // Sedov's exact u diverges at the centre: draw it only up to twice the particles' largest u
     let u_top = 2.0 * (0..p.len()).map(|i| p.u[i]).fold(0.0, f64::max);
     let eu: Vec<(f64, f64)> = eu.into_iter().filter(|e| e.1 <= u_top).collect();
-    let (pr, pv, pp, pu) = (
-        col(&|i| p.rho[i]),
-        col(&v_r),
-        col(&|i| p.pressure[i]),
-        col(&|i| p.u[i]),
-    );
-    let png = out.join("profile.png");
     let caption = format!(
         "{} at t = {:.3}: {} particles, shock r = {:.4} (exact {:.4}), L1(rho) = {:.3e}  [sphfmu run]",
         case.case.name,
@@ -152,29 +142,64 @@ fn verify_radial<const D: usize>(
         errs.shock_radius_exact,
         errs.l1_density
     );
+    write_profile(
+        sim,
+        out,
+        &caption,
+        &radius,
+        &v_r,
+        ["density against r", "radial velocity"],
+        [&er, &ev, &ep, &eu],
+        summary,
+    )
+}
+
+/// `profile.png`: ρ, a velocity, P and u of every particle against `x(i)` with the exact curves.
+#[allow(clippy::too_many_arguments)]
+fn write_profile<const D: usize>(
+    sim: &Simulation<D>,
+    out: &Path,
+    caption: &str,
+    x: &dyn Fn(usize) -> f64,
+    velocity: &dyn Fn(usize) -> f64,
+    titles: [&str; 2],
+    exact: [&[(f64, f64)]; 4],
+    summary: &mut RunSummary,
+) -> Result<(), RunError> {
+    let p = &sim.sys.particles;
+    let col = |f: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> {
+        (0..p.len()).map(|i| (x(i), f(i))).collect()
+    };
+    let (pr, pv, pp, pu) = (
+        col(&|i| p.rho[i]),
+        col(velocity),
+        col(&|i| p.pressure[i]),
+        col(&|i| p.u[i]),
+    );
     let panels = [
         Panel {
-            title: "density against r",
+            title: titles[0],
             particles: &pr,
-            exact: &er,
+            exact: exact[0],
         },
         Panel {
-            title: "radial velocity",
+            title: titles[1],
             particles: &pv,
-            exact: &ev,
+            exact: exact[1],
         },
         Panel {
             title: "pressure",
             particles: &pp,
-            exact: &ep,
+            exact: exact[2],
         },
         Panel {
             title: "specific internal energy",
             particles: &pu,
-            exact: &eu,
+            exact: exact[3],
         },
     ];
-    profile_png(&png, &caption, &panels).map_err(|e| io_err(&png, e))?;
+    let png = out.join("profile.png");
+    profile_png(&png, caption, &panels).map_err(|e| io_err(&png, e))?;
     summary.plot = Some(png);
     Ok(())
 }
@@ -243,16 +268,6 @@ fn verify_riemann<const D: usize>(
             )
         })
         .collect();
-    let col = |f: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> {
-        (0..p.len()).map(|i| (p.pos[i][0], f(i))).collect()
-    };
-    let (pr, pu, pp, pe) = (
-        col(&|i| p.rho[i]),
-        col(&|i| p.vel[i][0]),
-        col(&|i| p.pressure[i]),
-        col(&|i| p.u[i]),
-    );
-    let png = out.join("profile.png");
     let caption = format!(
         "{} at t = {:.3}: {} particles, L1(rho) = {:.3e}  [sphfmu run]",
         case.case.name,
@@ -260,33 +275,14 @@ fn verify_riemann<const D: usize>(
         p.len(),
         errs.l1_density
     );
-    profile_png(
-        &png,
+    write_profile(
+        sim,
+        out,
         &caption,
-        &[
-            Panel {
-                title: "density",
-                particles: &pr,
-                exact: &er,
-            },
-            Panel {
-                title: "velocity",
-                particles: &pu,
-                exact: &eu,
-            },
-            Panel {
-                title: "pressure",
-                particles: &pp,
-                exact: &ep,
-            },
-            Panel {
-                title: "specific internal energy",
-                particles: &pe,
-                exact: &ee,
-            },
-        ],
+        &|i| p.pos[i][0],
+        &|i| p.vel[i][0],
+        ["density", "velocity"],
+        [&er, &eu, &ep, &ee],
+        summary,
     )
-    .map_err(|e| io_err(&png, e))?;
-    summary.plot = Some(png);
-    Ok(())
 }

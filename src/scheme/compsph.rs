@@ -13,9 +13,9 @@
 use super::compatible::PairWork;
 use super::crksph::viscosity::{pair_q, ViscosityParams};
 use super::cullen::{CullenDehnen, CullenParams};
+use super::paper_step::{self, PairSums};
 use super::standard::check_range;
 use super::{smoothing, Scheme, SchemeError};
-use crate::particles::Vector;
 use crate::system::System;
 use nalgebra::SMatrix;
 use serde::{Deserialize, Serialize};
@@ -56,25 +56,6 @@ impl CompsphParams {
             ));
         }
         Ok(())
-    }
-}
-
-#[derive(Clone, Copy)]
-struct Acc<const D: usize> {
-    acc: Vector<D>,
-    dudt: f64,
-    q_max: f64,
-    approach: f64,
-}
-
-impl<const D: usize> Default for Acc<D> {
-    fn default() -> Self {
-        Self {
-            acc: Vector::zeros(),
-            dudt: 0.0,
-            q_max: 0.0,
-            approach: 0.0,
-        }
     }
 }
 
@@ -125,7 +106,7 @@ impl<const D: usize> Scheme<D> for Compsph<D> {
         }
         let t0 = std::time::Instant::now();
         let n = sys.particles.len();
-        let mut out = vec![Acc::<D>::default(); n];
+        let mut out = vec![PairSums::<D>::default(); n];
         let mut work = std::mem::take(&mut self.work);
         work.reset(sys);
         let base = ViscosityParams {
@@ -178,18 +159,7 @@ impl<const D: usize> Scheme<D> for Compsph<D> {
             });
         }
         self.work = work;
-        let eta = sys.eta;
-        let p = &sys.particles;
-        let vsig: Vec<f64> = (0..n)
-            .map(|i| {
-                let o = &out[i];
-                let s = p.sound_speed[i]
-                    .max((o.q_max.max(0.0) / p.rho[i]).sqrt())
-                    .max(o.approach);
-                (eta * s).max(p.h[i] * p.div_v[i].abs())
-            })
-            .collect();
-        sys.store_derivatives(t0, |i| (out[i].acc, out[i].dudt, vsig[i]));
+        paper_step::store(sys, t0, &out);
         Ok(())
     }
 

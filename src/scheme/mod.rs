@@ -6,6 +6,7 @@ pub mod compatible;
 pub mod compsph;
 pub mod crksph;
 pub mod cullen;
+mod paper_step;
 pub mod psph;
 pub mod rosswog;
 pub mod rpsph;

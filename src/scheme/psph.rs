@@ -18,9 +18,9 @@
 //! * f_ij = 1 where m_j u_j = 0 (cold gas: the G.7 correction is undefined there).
 
 use super::cullen::{CullenDehnen, CullenParams};
+use super::paper_step::{self, PairSums};
 use super::standard::check_range;
 use super::{smoothing, Scheme, SchemeError};
-use crate::particles::Vector;
 use crate::system::System;
 use nalgebra::SMatrix;
 use serde::{Deserialize, Serialize};
@@ -142,25 +142,6 @@ impl Psph {
     }
 }
 
-#[derive(Clone, Copy)]
-struct Acc<const D: usize> {
-    acc: Vector<D>,
-    dudt: f64,
-    q_max: f64,
-    approach: f64,
-}
-
-impl<const D: usize> Default for Acc<D> {
-    fn default() -> Self {
-        Self {
-            acc: Vector::zeros(),
-            dudt: 0.0,
-            q_max: 0.0,
-            approach: 0.0,
-        }
-    }
-}
-
 impl<const D: usize> Scheme<D> for Psph {
     fn name(&self) -> &'static str {
         "psph"
@@ -187,7 +168,7 @@ impl<const D: usize> Scheme<D> for Psph {
         }
         let t0 = std::time::Instant::now();
         let n = sys.particles.len();
-        let mut out = vec![Acc::<D>::default(); n];
+        let mut out = vec![PairSums::<D>::default(); n];
         let g1 = self.gamma - 1.0;
         let alpha_c = self.params.conductivity;
         {
@@ -253,18 +234,7 @@ impl<const D: usize> Scheme<D> for Psph {
                 o.approach = o.approach.max(-w);
             });
         }
-        let eta = sys.eta;
-        let p = &sys.particles;
-        let vsig: Vec<f64> = (0..n)
-            .map(|i| {
-                let o = &out[i];
-                let s = p.sound_speed[i]
-                    .max((o.q_max.max(0.0) / p.rho[i]).sqrt())
-                    .max(o.approach);
-                (eta * s).max(p.h[i] * p.div_v[i].abs())
-            })
-            .collect();
-        sys.store_derivatives(t0, |i| (out[i].acc, out[i].dudt, vsig[i]));
+        paper_step::store(sys, t0, &out);
         Ok(())
     }
 

@@ -24,10 +24,10 @@ pub mod reproducing;
 pub mod viscosity;
 
 use super::compatible::PairWork;
+use super::paper_step::{self, PairSums};
 use super::rosswog::gradients::reflect;
 use super::standard::{check_range, curl_norm};
 use super::{smoothing, Scheme, SchemeError};
-use crate::particles::Vector;
 use crate::system::System;
 use reproducing::{
     coefficients, density, pair_kernels_and_volumes, PairKernel, RkCoefficients, RkOrder,
@@ -114,26 +114,6 @@ impl CrksphParams {
             eta_fold: self.eta_fold,
             native_support: eta_max,
             limiter: self.limiter,
-        }
-    }
-}
-
-/// What the force pass accumulates per particle.
-#[derive(Clone, Copy)]
-struct CrkAcc<const D: usize> {
-    acc: Vector<D>,
-    dudt: f64,
-    q_max: f64,
-    approach: f64,
-}
-
-impl<const D: usize> Default for CrkAcc<D> {
-    fn default() -> Self {
-        Self {
-            acc: Vector::zeros(),
-            dudt: 0.0,
-            q_max: 0.0,
-            approach: 0.0,
         }
     }
 }
@@ -229,7 +209,7 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
 
         let t0 = std::time::Instant::now();
         let n = sys.particles.len();
-        let mut out = vec![CrkAcc::<D>::default(); n];
+        let mut out = vec![PairSums::<D>::default(); n];
         let mut work = std::mem::take(&mut self.work);
         work.reset(sys);
         {
@@ -266,18 +246,7 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
             });
         }
         self.work = work;
-        let eta = sys.eta;
-        let p = &sys.particles;
-        let vsig: Vec<f64> = (0..n)
-            .map(|i| {
-                let o = &out[i];
-                let s = p.sound_speed[i]
-                    .max((o.q_max.max(0.0) / p.rho[i]).sqrt())
-                    .max(o.approach);
-                (eta * s).max(p.h[i] * p.div_v[i].abs())
-            })
-            .collect();
-        sys.store_derivatives(t0, |i| (out[i].acc, out[i].dudt, vsig[i]));
+        paper_step::store(sys, t0, &out);
         Ok(())
     }
 
