@@ -10,31 +10,10 @@ fn random_box(integrator: &str) -> String {
 }
 
 fn random_box_with(scheme: &str, integrator: &str) -> String {
-    format!(
-        r#"
-{header}[scheme]
-{scheme}
-[time]
-t_end = 1.0
-integrator = "{integrator}"
-[[region]]
-spacing = 0.025
-density = 1.0
-pressure = 1.0
-velocity = [0.3, -0.2]
-[[region]]
-shape = "sphere"
-center = [0.5, 0.5]
-radius = 0.25
-spacing = 0.02
-density = 2.0
-pressure = 3.0
-velocity = [-0.4, 0.1]
-[perturbation]
-amplitude = 0.3
-seed = 42
-"#,
-        header = common::header(2, 0.0, 1.0, "periodic", 1.6666666666666667)
+    common::random_box(
+        scheme,
+        &format!("integrator = \"{integrator}\""),
+        (0.025, 0.02),
     )
 }
 

@@ -87,31 +87,7 @@ fn ia_gradient_is_exact_on_a_perfect_lattice_and_loses_the_edge_when_perturbed()
 }
 
 fn random_box(scheme: &str) -> String {
-    format!(
-        r#"
-{header}[scheme]
-name = "{scheme}"
-[time]
-t_end = 1.0
-[[region]]
-spacing = 0.03
-density = 1.0
-pressure = 1.0
-velocity = [0.3, -0.2]
-[[region]]
-shape = "sphere"
-center = [0.5, 0.5]
-radius = 0.25
-spacing = 0.025
-density = 2.0
-pressure = 3.0
-velocity = [-0.4, 0.1]
-[perturbation]
-amplitude = 0.3
-seed = 42
-"#,
-        header = common::header(2, 0.0, 1.0, "periodic", 1.6666666666666667)
-    )
+    common::random_box(&format!("name = \"{scheme}\""), "", (0.03, 0.025))
 }
 
 #[test]
