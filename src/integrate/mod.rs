@@ -99,6 +99,19 @@ fn combine_density<const D: usize>(sys: &mut System<D>, s0: &[f64], c0: f64, c1:
         .for_each(|(i, (r, d))| *r = s0[i] * c0 + (*r + d * dt) * c1);
 }
 
+/// ρ ← ρ_from + dt·dρ/dt (when the scheme evolves ρ).
+fn kick_density<const D: usize>(sys: &mut System<D>, from: &[f64], dt: f64) {
+    if !sys.evolve_density {
+        return;
+    }
+    let p = &mut sys.particles;
+    p.rho
+        .par_iter_mut()
+        .zip(p.drhodt.par_iter())
+        .enumerate()
+        .for_each(|(i, (r, d))| *r = from[i] + d * dt);
+}
+
 fn enforce_boundaries<const D: usize>(sys: &mut System<D>) {
     let dom = sys.domain;
     let p = &mut sys.particles;
@@ -130,13 +143,10 @@ impl<const D: usize> Integrator<D> {
                 // kick + drift; keep v_half in `saved.vel`, u_half in `saved.u`, ρ_half in
                 // `saved.rho`; ρ is predicted to the end of the step like u
                 if sys.evolve_density {
-                    let p = &mut sys.particles;
-                    self.saved.rho = (0..p.len())
-                        .map(|i| p.rho[i] + p.drhodt[i] * half)
-                        .collect();
-                    for i in 0..p.len() {
-                        p.rho[i] = self.saved.rho[i] + p.drhodt[i] * half;
-                    }
+                    self.saved.rho.clone_from(&sys.particles.rho);
+                    kick_density(sys, &self.saved.rho, half);
+                    self.saved.rho.clone_from(&sys.particles.rho);
+                    kick_density(sys, &self.saved.rho, half);
                 }
                 {
                     let p = &mut sys.particles;
@@ -182,12 +192,7 @@ impl<const D: usize> Integrator<D> {
                 scheme.evaluate(sys)?;
                 sys.hold_constrained();
                 sys.accumulate_impulse(half);
-                if sys.evolve_density {
-                    let p = &mut sys.particles;
-                    for i in 0..p.len() {
-                        p.rho[i] = self.saved.rho[i] + p.drhodt[i] * half;
-                    }
-                }
+                kick_density(sys, &self.saved.rho, half);
                 let p = &mut sys.particles;
                 let (sv, su) = (&self.saved.vel, &self.saved.u);
                 p.vel
@@ -254,12 +259,7 @@ impl<const D: usize> Integrator<D> {
                             *u = s0.u[i] + dudt[i] * dt;
                         });
                 }
-                if sys.evolve_density {
-                    let p = &mut sys.particles;
-                    for i in 0..p.len() {
-                        p.rho[i] = s0.rho[i] + p.drhodt[i] * dt;
-                    }
-                }
+                kick_density(sys, &s0.rho, dt);
                 if let Some(work) = scheme.pair_work() {
                     let p = &sys.particles;
                     let v_half: Vec<Vector<D>> = (0..p.len())
