@@ -14,7 +14,7 @@ use super::compatible::PairWork;
 use super::crksph::viscosity::{pair_q, ViscosityParams};
 use super::cullen::{CullenDehnen, CullenParams};
 use super::paper_step::{self, PairSums};
-use super::standard::check_range;
+use super::standard::{check_above, check_range};
 use super::{smoothing, Scheme, SchemeError};
 use crate::system::System;
 use nalgebra::SMatrix;
@@ -49,12 +49,7 @@ impl CompsphParams {
     pub fn validate(&self) -> Result<(), String> {
         check_range("scheme.c_l", self.c_l, 0.0, 10.0)?;
         check_range("scheme.c_q", self.c_q, 0.0, 10.0)?;
-        if !(self.epsilon2 > 0.0 && self.epsilon2 <= 1.0) {
-            return Err(format!(
-                "scheme.epsilon2: must be in (0, 1], got {}",
-                self.epsilon2
-            ));
-        }
+        check_above("scheme.epsilon2", self.epsilon2, 0.0, 1.0)?;
         Ok(())
     }
 }

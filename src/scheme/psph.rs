@@ -19,7 +19,7 @@
 
 use super::cullen::{CullenDehnen, CullenParams};
 use super::paper_step::{self, PairSums};
-use super::standard::check_range;
+use super::standard::{check_above, check_range};
 use super::{smoothing, Scheme, SchemeError};
 use crate::system::System;
 use nalgebra::SMatrix;
@@ -59,12 +59,7 @@ impl PsphParams {
             check_range("scheme.c_q", c, 0.0, 10.0)?;
         }
         check_range("scheme.conductivity", self.conductivity, 0.0, 5.0)?;
-        if !(self.epsilon2 > 0.0 && self.epsilon2 <= 1.0) {
-            return Err(format!(
-                "scheme.epsilon2: must be in (0, 1], got {}",
-                self.epsilon2
-            ));
-        }
+        check_above("scheme.epsilon2", self.epsilon2, 0.0, 1.0)?;
         Ok(())
     }
 }

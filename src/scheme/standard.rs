@@ -64,6 +64,15 @@ impl Default for StandardParams {
     }
 }
 
+/// `v` in (lo, hi]: finite, above `lo`, at most `hi`; the error names the key and the range.
+pub(crate) fn check_above(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), String> {
+    if v > lo && v <= hi {
+        Ok(())
+    } else {
+        Err(format!("{key}: must be in ({lo}, {hi}], got {v}"))
+    }
+}
+
 pub(crate) fn check_range(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), String> {
     if v.is_finite() && v >= lo && v <= hi {
         Ok(())
@@ -77,13 +86,7 @@ impl StandardParams {
         check_range("scheme.alpha", self.alpha, 0.0, 10.0)?;
         check_range("scheme.beta", self.beta, 0.0, 20.0)?;
         check_range("scheme.conductivity", self.conductivity, 0.0, 5.0)?;
-        if !(self.epsilon > 0.0 && self.epsilon <= 1.0) {
-            return Err(format!(
-                "scheme.epsilon: must be in (0, 1], got {}",
-                self.epsilon
-            ));
-        }
-        Ok(())
+        check_above("scheme.epsilon", self.epsilon, 0.0, 1.0)
     }
 }
 

@@ -26,7 +26,7 @@ pub mod viscosity;
 use super::compatible::PairWork;
 use super::paper_step::{self, PairSums};
 use super::rosswog::gradients::reflect;
-use super::standard::{check_range, curl_norm};
+use super::standard::{check_above, check_range, curl_norm};
 use super::{smoothing, Scheme, SchemeError};
 use crate::system::System;
 use reproducing::{
@@ -87,18 +87,8 @@ impl CrksphParams {
         if let Some(c) = self.c_q {
             check_range("scheme.c_q", c, 0.0, 10.0)?;
         }
-        if !(self.epsilon2 > 0.0 && self.epsilon2 <= 1.0) {
-            return Err(format!(
-                "scheme.epsilon2: must be in (0, 1], got {}",
-                self.epsilon2
-            ));
-        }
-        if !(self.eta_fold > 0.0 && self.eta_fold <= 2.0) {
-            return Err(format!(
-                "scheme.eta_fold: must be in (0, 2], got {}",
-                self.eta_fold
-            ));
-        }
+        check_above("scheme.epsilon2", self.epsilon2, 0.0, 1.0)?;
+        check_above("scheme.eta_fold", self.eta_fold, 0.0, 2.0)?;
         Ok(())
     }
 
