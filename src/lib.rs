@@ -6,6 +6,7 @@
 pub mod bench;
 pub mod boundary;
 pub mod case;
+pub mod coupling;
 pub mod domain;
 pub mod eos;
 pub mod integrate;

@@ -8,7 +8,7 @@ pub type Vector<const D: usize> = SVector<f64, D>;
 /// Per-particle state. Evolved fields (x, v, u) and the fields every scheme derives each
 /// evaluation; schemes that need more register `extra_scalars` / `extra_vectors` slots, which
 /// move with the particles when they are reordered.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct Particles<const D: usize> {
     pub mass: Vec<f64>,
     pub pos: Vec<Vector<D>>,

@@ -238,6 +238,21 @@ impl<const D: usize> Simulation<D> {
         Ok(())
     }
 
+    /// Evaluate the derivatives again at the current state (after an input changed: gravity,
+    /// or the pose of an externally driven body, whose walls are placed first).
+    pub fn reevaluate(&mut self) -> Result<(), SolverError> {
+        self.sys.place_bodies(self.time);
+        self.scheme
+            .evaluate(&mut self.sys)
+            .map_err(|e| SolverError::Scheme {
+                message: e.0,
+                time: self.time,
+                step: self.steps,
+            })?;
+        self.sys.hold_constrained();
+        self.check_finite()
+    }
+
     /// Sort particles by grid cell for memory locality.
     pub fn reorder(&mut self) {
         let perm = self.sys.grid.sorted.clone();

@@ -9,7 +9,7 @@ use crate::particles::{Particles, Vector};
 use rayon::prelude::*;
 
 /// Counters of the latest evaluation (for benchmarks and diagnostics).
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, serde::Serialize, serde::Deserialize)]
 pub struct EvalStats {
     /// Pair interactions evaluated in the force pass.
     pub force_pairs: u64,
@@ -80,7 +80,7 @@ pub struct System<const D: usize> {
 }
 
 /// A neighbour list with a skin, the positions and radii it was built for.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct VerletList<const D: usize> {
     pub list: NeighbourList,
     pub pos: Vec<Vector<D>>,

@@ -14,16 +14,18 @@
 //! (gravity removed), the exact reaction of what the fluid receives, since every pair force
 //! is antisymmetric. Walls move only with their body's kinematics.
 
-use super::kinematics::{Motion, Pose};
+use super::kinematics::{HeldPose, Motion, Pose};
 use crate::neighbours::unpack;
 use crate::particles::Vector;
 use crate::system::System;
 use rayon::prelude::*;
 
 /// One rigid body at run time.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Body<const D: usize> {
     pub name: String,
+    /// From the case, so not part of a saved state (`coupling::state` puts it back).
+    #[serde(skip)]
     pub motion: Motion,
     /// Reference point at t = 0 (kinematics and torque are about it, moved by d(t)).
     pub reference: Vector<D>,
@@ -41,6 +43,8 @@ pub struct Body<const D: usize> {
     /// round-off.
     pub impulse: Vector<D>,
     pub angular_impulse: [f64; 3],
+    /// Pose set from outside (`Motion::External`), carried on at its velocities.
+    pub held: HeldPose<D>,
 }
 
 fn to3<const D: usize>(v: &Vector<D>) -> nalgebra::Vector3<f64> {
@@ -103,9 +107,10 @@ impl<const D: usize> System<D> {
             return;
         }
         for b in &mut self.bodies {
-            if b.motion != Motion::External {
-                b.pose = b.motion.pose::<D>(t);
-            }
+            b.pose = match b.motion {
+                Motion::External => b.held.at(t),
+                _ => b.motion.pose::<D>(t),
+            };
         }
         let bodies = &self.bodies;
         let p = &mut self.particles;

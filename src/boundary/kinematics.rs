@@ -49,7 +49,7 @@ pub enum Motion {
 }
 
 /// Translation and rotation of a body at one instant (rotation about the body axis).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Pose<const D: usize> {
     pub displacement: crate::particles::Vector<D>,
     pub velocity: crate::particles::Vector<D>,
@@ -68,6 +68,30 @@ impl<const D: usize> Default for Pose<D> {
             acceleration: z,
             angle: 0.0,
             angular_velocity: 0.0,
+            angular_acceleration: 0.0,
+        }
+    }
+}
+
+/// The pose last set from outside (`Motion::External`, the Coupling API) and when: between
+/// two updates the body moves on at the velocities it was given (so its acceleration is zero
+/// and the wall condition sees none).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct HeldPose<const D: usize> {
+    pub time: f64,
+    pub pose: Pose<D>,
+}
+
+impl<const D: usize> HeldPose<D> {
+    /// The pose at t ≥ `time`: displacement and angle carried on at constant velocity.
+    pub fn at(&self, t: f64) -> Pose<D> {
+        let dt = t - self.time;
+        Pose {
+            displacement: self.pose.displacement + self.pose.velocity * dt,
+            velocity: self.pose.velocity,
+            acceleration: crate::particles::Vector::<D>::zeros(),
+            angle: self.pose.angle + self.pose.angular_velocity * dt,
+            angular_velocity: self.pose.angular_velocity,
             angular_acceleration: 0.0,
         }
     }

@@ -140,6 +140,7 @@ pub(super) fn add_bodies<const D: usize>(
             particle_volume: dx.powi(D as i32),
             impulse: Vector::zeros(),
             angular_impulse: [0.0; 3],
+            held: Default::default(),
         });
     }
     Ok(out)

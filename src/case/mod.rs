@@ -5,6 +5,9 @@ mod bodies;
 mod checks;
 mod glass;
 mod ics;
+mod probes;
+
+pub use probes::{MarkerConfig, ProbeConfig};
 
 pub use bodies::BodyConfig;
 pub use checks::{Blast, Verify};
@@ -73,6 +76,12 @@ pub struct Case {
     /// Rigid boundary bodies made of wall particles.
     #[serde(default, rename = "body")]
     pub bodies: Vec<BodyConfig>,
+    /// Points in the fluid where ρ, P and v are reported (Coupling API, FMU outputs).
+    #[serde(default, rename = "probe")]
+    pub probes: Vec<ProbeConfig>,
+    /// Points on body surfaces where the wall pressure is reported.
+    #[serde(default, rename = "marker")]
+    pub markers: Vec<MarkerConfig>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -482,6 +491,7 @@ impl Case {
         for (i, b) in self.bodies.iter().enumerate() {
             b.validate(i, self)?;
         }
+        self.validate_probes()?;
         Ok(())
     }
 

@@ -29,7 +29,7 @@ pub enum IntegratorKind {
 }
 
 /// Saved start-of-step state.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 struct Saved<const D: usize> {
     pos: Vec<Vector<D>>,
     vel: Vec<Vector<D>>,
@@ -61,7 +61,7 @@ impl<const D: usize> Saved<D> {
     }
 }
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Integrator<const D: usize> {
     pub kind: IntegratorKind,
     saved: Saved<D>,

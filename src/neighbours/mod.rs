@@ -29,11 +29,14 @@ pub fn unpack(entry: u32) -> (usize, ImageCode) {
 }
 
 /// Uniform cell grid over the particles' bounding box (the domain on periodic axes).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct CellGrid<const D: usize> {
+    #[serde(with = "crate::coupling::state::const_array")]
     origin: [f64; D],
     cell: f64,
+    #[serde(with = "crate::coupling::state::const_array")]
     dims: [usize; D],
+    #[serde(with = "crate::coupling::state::const_array")]
     periodic: [bool; D],
     /// Particle indices sorted by cell.
     pub sorted: Vec<u32>,
@@ -233,7 +236,7 @@ impl<const D: usize> CellGrid<D> {
 }
 
 /// Compressed neighbour lists (CSR): neighbours of a are `entries[offsets[a]..offsets[a+1]]`.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct NeighbourList {
     pub offsets: Vec<usize>,
     pub entries: Vec<u32>,

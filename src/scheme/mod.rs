@@ -42,6 +42,23 @@ pub trait Scheme<const D: usize>: Send + Sync {
     fn pair_work(&self) -> Option<&compatible::PairWork<D>> {
         None
     }
+    /// State the scheme carries from one step to the next outside the particles (saved and
+    /// restored by `coupling::state`; per-particle state belongs in `extra_scalars`).
+    fn carried_state(&self) -> Vec<f64> {
+        vec![]
+    }
+    /// Put back what [`Self::carried_state`] returned.
+    fn set_carried_state(&mut self, state: &[f64]) -> Result<(), String> {
+        if state.is_empty() {
+            Ok(())
+        } else {
+            Err(format!(
+                "{}: carries no state, got {} values",
+                self.name(),
+                state.len()
+            ))
+        }
+    }
 }
 
 /// `[scheme]` table of a case file.

@@ -404,4 +404,22 @@ impl<const D: usize> Scheme<D> for Rosswog {
         triggers::update(sys, &self.params, self.prev_div_slot, dt, self.first_step);
         self.first_step = false;
     }
+
+    /// Whether the trigger has seen a step yet (its first step has no previous ∇·v).
+    fn carried_state(&self) -> Vec<f64> {
+        vec![if self.first_step { 1.0 } else { 0.0 }]
+    }
+
+    fn set_carried_state(&mut self, state: &[f64]) -> Result<(), String> {
+        match state {
+            [f] if *f == 0.0 || *f == 1.0 => {
+                self.first_step = *f == 1.0;
+                Ok(())
+            }
+            _ => Err(format!(
+                "{}: expected one 0/1 flag, got {state:?}",
+                <Self as Scheme<D>>::name(self)
+            )),
+        }
+    }
 }

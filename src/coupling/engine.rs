@@ -1,0 +1,166 @@
+//! The dimension-generic half of the Coupling: a `Simulation<D>` behind an object-safe trait,
+//! so `Coupling` itself is not generic.
+
+use super::{sampling, state, BodyKinematics, BodyLoads, CouplingError, ProbeValue, StepReport};
+use crate::boundary::kinematics::{HeldPose, Pose};
+use crate::case::Case;
+use crate::particles::Vector;
+use crate::sim::{Diagnostics, Simulation, SolverError};
+
+pub(super) trait Engine: Send + Sync {
+    fn time(&self) -> f64;
+    fn gravity(&self) -> [f64; 3];
+    fn set_gravity(&mut self, g: &[f64; 3]);
+    fn body(&self, b: usize) -> BodyKinematics;
+    fn set_body(&mut self, b: usize, k: &BodyKinematics);
+    fn advance_to(&mut self, t: f64) -> Result<StepReport, SolverError>;
+    fn loads(&self) -> Vec<BodyLoads>;
+    fn probes(&self, points: &[[f64; 3]]) -> Vec<ProbeValue>;
+    fn markers(&self, markers: &[(usize, [f64; 3])]) -> Vec<f64>;
+    fn diagnostics(&self) -> Diagnostics;
+    fn save(&self, fingerprint: u64) -> Vec<u8>;
+    fn restore(&mut self, bytes: &[u8], fingerprint: u64) -> Result<(), String>;
+}
+
+pub(super) fn build(case: &Case) -> Result<Box<dyn Engine>, CouplingError> {
+    Ok(match case.case.dimension {
+        1 => Box::new(Coupled::new(case.build::<1>()?)),
+        2 => Box::new(Coupled::new(case.build::<2>()?)),
+        3 => Box::new(Coupled::new(case.build::<3>()?)),
+        d => {
+            return Err(CouplingError(format!(
+                "case.dimension: must be 1, 2 or 3, got {d}"
+            )))
+        }
+    })
+}
+
+pub(super) struct Coupled<const D: usize> {
+    pub sim: Simulation<D>,
+    /// An input changed since the latest evaluation: re-evaluate before the next step.
+    pub dirty: bool,
+}
+
+impl<const D: usize> Coupled<D> {
+    fn new(sim: Simulation<D>) -> Self {
+        Self { sim, dirty: false }
+    }
+}
+
+fn vector<const D: usize>(v: &[f64; 3]) -> Vector<D> {
+    Vector::<D>::from_fn(|k, _| v[k])
+}
+
+fn array<const D: usize>(v: &Vector<D>) -> [f64; 3] {
+    let mut o = [0.0; 3];
+    o[..D].copy_from_slice(v.as_slice());
+    o
+}
+
+impl<const D: usize> Engine for Coupled<D> {
+    fn time(&self) -> f64 {
+        self.sim.time
+    }
+
+    fn gravity(&self) -> [f64; 3] {
+        array(&self.sim.sys.gravity)
+    }
+
+    fn set_gravity(&mut self, g: &[f64; 3]) {
+        let g = vector::<D>(g);
+        if g != self.sim.sys.gravity {
+            self.sim.sys.gravity = g;
+            self.dirty = true;
+        }
+    }
+
+    fn body(&self, b: usize) -> BodyKinematics {
+        let body = &self.sim.sys.bodies[b];
+        let p = &body.pose;
+        BodyKinematics {
+            position: array(&(body.reference + p.displacement)),
+            angle: p.angle,
+            velocity: array(&p.velocity),
+            angular_velocity: p.angular_velocity,
+        }
+    }
+
+    fn set_body(&mut self, b: usize, k: &BodyKinematics) {
+        let time = self.sim.time;
+        let body = &mut self.sim.sys.bodies[b];
+        let held = HeldPose {
+            time,
+            pose: Pose {
+                displacement: vector::<D>(&k.position) - body.reference,
+                velocity: vector::<D>(&k.velocity),
+                angle: k.angle,
+                angular_velocity: k.angular_velocity,
+                ..Pose::default()
+            },
+        };
+        self.dirty |= held.at(time) != body.pose;
+        body.held = held;
+    }
+
+    fn advance_to(&mut self, t: f64) -> Result<StepReport, SolverError> {
+        if self.dirty && t > self.sim.time {
+            self.sim.reevaluate()?;
+            self.dirty = false;
+        }
+        let start = self.sim.steps;
+        let mut report = StepReport {
+            dt_min: f64::INFINITY,
+            ..StepReport::default()
+        };
+        let mut before = self.sim.time;
+        self.sim.advance_to(t, |s| {
+            let dt = s.time - before;
+            before = s.time;
+            report.dt_min = report.dt_min.min(dt);
+            report.dt_max = report.dt_max.max(dt);
+        })?;
+        report.steps = self.sim.steps - start;
+        if report.steps == 0 {
+            report.dt_min = 0.0;
+        }
+        Ok(report)
+    }
+
+    fn loads(&self) -> Vec<BodyLoads> {
+        self.sim
+            .sys
+            .bodies
+            .iter()
+            .map(|b| BodyLoads {
+                force: array(&b.force),
+                torque: b.torque,
+            })
+            .collect()
+    }
+
+    fn probes(&self, points: &[[f64; 3]]) -> Vec<ProbeValue> {
+        points
+            .iter()
+            .map(|x| sampling::probe(&self.sim.sys, &vector::<D>(x)))
+            .collect()
+    }
+
+    fn markers(&self, markers: &[(usize, [f64; 3])]) -> Vec<f64> {
+        markers
+            .iter()
+            .map(|(b, x)| sampling::marker_pressure(&self.sim.sys, *b, &vector::<D>(x)))
+            .collect()
+    }
+
+    fn diagnostics(&self) -> Diagnostics {
+        self.sim.diagnostics()
+    }
+
+    fn save(&self, fingerprint: u64) -> Vec<u8> {
+        state::save(self, fingerprint)
+    }
+
+    fn restore(&mut self, bytes: &[u8], fingerprint: u64) -> Result<(), String> {
+        state::restore(self, bytes, fingerprint)
+    }
+}

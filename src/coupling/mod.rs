@@ -1,0 +1,345 @@
+//! The `Coupling` interface (issue 5): what a co-simulation master does with the solver —
+//! set gravity, set the pose and velocities of externally driven bodies, step to a time,
+//! read forces, torques, probe and marker values, and save / restore the whole state bit for
+//! bit. The FMU and the zenoh bridge are thin faces over this type; it knows nothing of FMI
+//! or zenoh.
+//!
+//! Each `Coupling` owns its rayon pool (the FMU lives in someone else's process, beside other
+//! instances): every solver call runs inside `pool.install`.
+//!
+//! Inputs take effect from the current time on: gravity is held constant until the next
+//! change, and an external body moves on at the velocities it was given. A changed input
+//! makes the next `step_to` re-evaluate the derivatives at the current state first (so the
+//! first step after a jump in gravity or a moved wall sees it); an input set to the value it
+//! already has changes nothing, so repeating inputs keeps runs identical.
+
+mod engine;
+pub mod sampling;
+pub mod state;
+
+use crate::case::{Case, CaseError};
+use crate::sim::Diagnostics;
+use engine::Engine;
+use std::fmt;
+use std::path::Path;
+
+/// Why a Coupling call failed. The state is unchanged when an input is rejected; after a
+/// solver failure (`step_to`) it is the state where the solver stopped, and `restore` of a
+/// saved state makes it usable again.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CouplingError(pub String);
+
+impl fmt::Display for CouplingError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for CouplingError {}
+
+impl From<CaseError> for CouplingError {
+    fn from(e: CaseError) -> Self {
+        CouplingError(e.0)
+    }
+}
+
+/// Settings a master may change before the run (FMU parameters).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CouplingOptions {
+    /// Another scheme preset (its own kernel and integrator), as `sphfmu run --scheme`.
+    pub scheme: Option<String>,
+    /// Refinement factor on every particle spacing (2 = twice as fine), in [0.1, 10].
+    pub resolution: f64,
+    /// Courant factor replacing the case's, in (0, 1].
+    pub cfl: Option<f64>,
+    /// Worker threads of this instance's pool (0 = one per core).
+    pub threads: usize,
+}
+
+impl Default for CouplingOptions {
+    fn default() -> Self {
+        Self {
+            scheme: None,
+            resolution: 1.0,
+            cfl: None,
+            threads: 0,
+        }
+    }
+}
+
+impl CouplingOptions {
+    /// The case with these options applied (and validated).
+    pub fn apply(&self, case: &Case) -> Result<Case, CouplingError> {
+        let r = self.resolution;
+        if !(r.is_finite() && (0.1..=10.0).contains(&r)) {
+            return Err(CouplingError(format!(
+                "resolution: must be in [0.1, 10], got {r}"
+            )));
+        }
+        let mut case = match &self.scheme {
+            Some(s) if !s.trim().is_empty() => case.with_scheme(s.trim())?,
+            _ => case.clone(),
+        };
+        if r != 1.0 {
+            let d = case.case.dimension as i32;
+            for reg in &mut case.regions {
+                reg.spacing = reg.spacing.map(|s| s / r);
+                reg.particle_mass = reg.particle_mass.map(|m| m / r.powi(d));
+            }
+            for b in &mut case.bodies {
+                b.spacing = b.spacing.map(|s| s / r);
+            }
+        }
+        if let Some(c) = self.cfl {
+            if !(c.is_finite() && c > 0.0 && c <= 1.0) {
+                return Err(CouplingError(format!("cfl: must be in (0, 1], got {c}")));
+            }
+            case.time.cfl = Some(c);
+        }
+        case.validate()?;
+        Ok(case)
+    }
+}
+
+/// Pose and velocities of an externally driven body (`motion = { type = "external" }`):
+/// the position of its reference point, the rotation angle about its axis (2D: about z), and
+/// the velocities it moves on with until the next update. Entries beyond the case's
+/// dimension must be 0.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct BodyKinematics {
+    pub position: [f64; 3],
+    pub angle: f64,
+    pub velocity: [f64; 3],
+    pub angular_velocity: f64,
+}
+
+/// Force and torque of the fluid on one body (torque about its moved reference point; 2D:
+/// only z), from the latest evaluation.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct BodyLoads {
+    pub force: [f64; 3],
+    pub torque: [f64; 3],
+}
+
+/// Fluid state at a probe, Shepard-interpolated: `coverage` = Σ_f V_f W(x − x_f, h_f) is
+/// ≈ 1 inside the fluid, below 1 near a free surface and 0 where no fluid reaches (then
+/// the values are 0).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ProbeValue {
+    pub density: f64,
+    pub pressure: f64,
+    pub velocity: [f64; 3],
+    pub coverage: f64,
+}
+
+/// What one `step_to` did (for solver logging).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StepReport {
+    pub steps: u64,
+    pub dt_min: f64,
+    pub dt_max: f64,
+}
+
+pub struct Coupling {
+    case: Case,
+    engine: Box<dyn Engine>,
+    pool: rayon::ThreadPool,
+}
+
+impl Coupling {
+    /// Build the solver for `case` with `options` (particles, first evaluation).
+    pub fn new(case: &Case, options: &CouplingOptions) -> Result<Self, CouplingError> {
+        let case = options.apply(case)?;
+        let threads = if options.threads == 0 {
+            std::thread::available_parallelism()
+                .map(|n| n.get())
+                .unwrap_or(1)
+        } else {
+            options.threads
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| CouplingError(format!("threads: cannot start {threads} workers ({e})")))?;
+        let engine = pool.install(|| engine::build(&case))?;
+        Ok(Self { case, engine, pool })
+    }
+
+    /// [`Self::new`] for a case file.
+    pub fn from_file(path: &Path, options: &CouplingOptions) -> Result<Self, CouplingError> {
+        let case = Case::load(path)?;
+        Self::new(&case, options)
+    }
+
+    /// The case as run (options applied).
+    pub fn case(&self) -> &Case {
+        &self.case
+    }
+
+    pub fn dimension(&self) -> usize {
+        self.case.case.dimension
+    }
+
+    pub fn time(&self) -> f64 {
+        self.engine.time()
+    }
+
+    pub fn body_names(&self) -> Vec<&str> {
+        self.case.bodies.iter().map(|b| b.name.as_str()).collect()
+    }
+
+    /// Index of the body called `name`.
+    pub fn body_index(&self, name: &str) -> Result<usize, CouplingError> {
+        self.case
+            .bodies
+            .iter()
+            .position(|b| b.name == name)
+            .ok_or_else(|| {
+                CouplingError(format!(
+                    "body: no body named {name:?} (bodies: {:?})",
+                    self.body_names()
+                ))
+            })
+    }
+
+    pub fn gravity(&self) -> [f64; 3] {
+        self.engine.gravity()
+    }
+
+    /// Uniform gravity from now on. Entries must be finite and 0 beyond the dimension.
+    pub fn set_gravity(&mut self, g: [f64; 3]) -> Result<(), CouplingError> {
+        check_vector("gravity", &g, self.dimension())?;
+        self.engine.set_gravity(&g);
+        Ok(())
+    }
+
+    /// Pose and velocities of body `body` from now on (its motion must be `external`).
+    pub fn set_body_kinematics(
+        &mut self,
+        body: usize,
+        k: &BodyKinematics,
+    ) -> Result<(), CouplingError> {
+        let d = self.dimension();
+        let cfg = self.case.bodies.get(body).ok_or_else(|| {
+            CouplingError(format!(
+                "body: index {body} out of range (the case has {} bodies)",
+                self.case.bodies.len()
+            ))
+        })?;
+        if cfg.motion != crate::boundary::kinematics::Motion::External {
+            return Err(CouplingError(format!(
+                "body {:?}: its motion is prescribed by the case; set motion = {{ type = \"external\" }} to drive it from outside",
+                cfg.name
+            )));
+        }
+        let key = |f: &str| format!("body {:?} {f}", cfg.name);
+        check_vector(&key("position"), &k.position, d)?;
+        check_vector(&key("velocity"), &k.velocity, d)?;
+        for (f, v) in [("angle", k.angle), ("angular_velocity", k.angular_velocity)] {
+            if !v.is_finite() {
+                return Err(CouplingError(format!(
+                    "{}: must be finite, got {v}",
+                    key(f)
+                )));
+            }
+            if d == 1 && v != 0.0 {
+                return Err(CouplingError(format!(
+                    "{}: must be 0 in a 1D case, got {v}",
+                    key(f)
+                )));
+            }
+        }
+        self.engine.set_body(body, k);
+        Ok(())
+    }
+
+    /// Current pose and velocities of body `body` (any motion).
+    pub fn body_kinematics(&self, body: usize) -> BodyKinematics {
+        self.engine.body(body)
+    }
+
+    /// Advance to time `t` exactly (sub-steps with the solver's own time step; the last one
+    /// lands on t). `t` must not lie before the current time.
+    pub fn step_to(&mut self, t: f64) -> Result<StepReport, CouplingError> {
+        let now = self.time();
+        if !t.is_finite() || t < now {
+            return Err(CouplingError(format!(
+                "step_to: target time must be finite and ≥ the current time {now}, got {t}"
+            )));
+        }
+        let engine = &mut self.engine;
+        self.pool
+            .install(|| engine.advance_to(t))
+            .map_err(|e| CouplingError(e.to_string()))
+    }
+
+    /// Force and torque on every body, in case order.
+    pub fn loads(&self) -> Vec<BodyLoads> {
+        self.engine.loads()
+    }
+
+    /// Values at every `[[probe]]`, in case order.
+    pub fn probes(&self) -> Vec<ProbeValue> {
+        let points: Vec<[f64; 3]> = self.case.probes.iter().map(|p| pad(&p.point)).collect();
+        self.pool.install(|| self.engine.probes(&points))
+    }
+
+    /// Wall pressure at every `[[marker]]`, in case order.
+    pub fn markers(&self) -> Vec<f64> {
+        let markers: Vec<(usize, [f64; 3])> = self
+            .case
+            .markers
+            .iter()
+            .map(|m| {
+                let b = self.case.bodies.iter().position(|b| b.name == m.body);
+                (
+                    b.expect("validated: the marker's body exists"),
+                    pad(&m.point),
+                )
+            })
+            .collect();
+        self.pool.install(|| self.engine.markers(&markers))
+    }
+
+    /// Time, steps, particle count, fluid mass, momentum and energy.
+    pub fn diagnostics(&self) -> Diagnostics {
+        self.pool.install(|| self.engine.diagnostics())
+    }
+
+    /// The whole solver state as bytes; [`Self::restore`] of them continues bit for bit as
+    /// this instance would.
+    pub fn save(&self) -> Vec<u8> {
+        self.engine.save(state::fingerprint(&self.case))
+    }
+
+    /// Return to a state from [`Self::save`] of a Coupling built from the same case and
+    /// options. A state that does not fit is rejected and nothing changes.
+    pub fn restore(&mut self, bytes: &[u8]) -> Result<(), CouplingError> {
+        self.engine
+            .restore(bytes, state::fingerprint(&self.case))
+            .map_err(CouplingError)
+    }
+}
+
+fn pad(v: &[f64]) -> [f64; 3] {
+    let mut o = [0.0; 3];
+    o[..v.len().min(3)].copy_from_slice(&v[..v.len().min(3)]);
+    o
+}
+
+/// Finite entries, 0 beyond the dimension.
+fn check_vector(key: &str, v: &[f64; 3], d: usize) -> Result<(), CouplingError> {
+    for (k, x) in v.iter().enumerate() {
+        if !x.is_finite() {
+            return Err(CouplingError(format!(
+                "{key}[{k}]: must be finite, got {x}"
+            )));
+        }
+        if k >= d && *x != 0.0 {
+            return Err(CouplingError(format!(
+                "{key}[{k}]: must be 0 in a {d}D case, got {x}"
+            )));
+        }
+    }
+    Ok(())
+}
