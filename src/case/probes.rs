@@ -70,7 +70,7 @@ impl Case {
                     .shape
                     .distance(&nalgebra::SVector::<f64, 3>::from_column_slice(&m.point)),
             };
-            if !(phi.abs() <= spacing) {
+            if phi.is_nan() || phi.abs() > spacing {
                 return Err(CaseError(format!(
                     "{key}.point: {:?} is {phi:.4} from the surface of body {:?}; a marker must lie within one wall spacing ({spacing}) of it",
                     m.point, m.body
