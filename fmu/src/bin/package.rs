@@ -1,0 +1,213 @@
+//! `sphfmu-package`: write the FMI 3.0 and FMI 2.0 `.fmu` archives for one case.
+//!
+//!   sphfmu-package --case models/free-piston2d.toml --lib target/release/libsphfmu_fmu.so \
+//!                  --models models --out target/fmu
+//!
+//! Each archive holds modelDescription.xml (written from the variable table of the case),
+//! the binary as binaries/<platform>/sphfmu.so, every case file of --models under resources/
+//! (with default-case.txt naming the packaged one) and documentation/ listing every variable.
+
+use sphfmu::case::Case;
+use sphfmu_fmu::table::{Causality, Start, Table};
+use sphfmu_fmu::xml::{self, Experiment, MODEL_IDENTIFIER};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+struct Args {
+    case: PathBuf,
+    lib: PathBuf,
+    models: PathBuf,
+    out: PathBuf,
+}
+
+fn args() -> Result<Args, String> {
+    let mut a = std::env::args().skip(1);
+    let (mut case, mut lib, mut models, mut out) = (None, None, None, None);
+    while let Some(k) = a.next() {
+        let v = a.next().ok_or(format!("{k}: needs a value"))?;
+        match k.as_str() {
+            "--case" => case = Some(v.into()),
+            "--lib" => lib = Some(v.into()),
+            "--models" => models = Some(v.into()),
+            "--out" => out = Some(v.into()),
+            _ => {
+                return Err(format!(
+                    "unknown argument {k} (use --case, --lib, --models, --out)"
+                ))
+            }
+        }
+    }
+    Ok(Args {
+        case: case.ok_or("--case: required")?,
+        lib: lib.ok_or("--lib: required")?,
+        models: models.unwrap_or_else(|| "models".into()),
+        out: out.unwrap_or_else(|| "target/fmu".into()),
+    })
+}
+
+fn documentation(table: &Table, case: &Case, fmi: &str) -> String {
+    let mut rows = String::new();
+    for v in &table.variables {
+        let start = match &v.start {
+            Start::None => String::new(),
+            Start::Float(x) => x
+                .iter()
+                .map(|x| format!("{x}"))
+                .collect::<Vec<_>>()
+                .join(" "),
+            Start::Int(i) => i.to_string(),
+            Start::Text(t) => t.clone(),
+        };
+        let shape = if v.size > 1 {
+            if fmi == "3.0" {
+                format!("[{}]", v.size)
+            } else {
+                format!("[1..{}] (scalars)", v.size)
+            }
+        } else {
+            String::new()
+        };
+        rows.push_str(&format!(
+            "<tr><td><code>{}{}</code></td><td>{:?}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+            xml::escape(&v.name),
+            shape,
+            v.kind,
+            match v.causality {
+                Causality::Independent => "independent",
+                Causality::Parameter => "parameter",
+                Causality::Input => "input",
+                Causality::Output => "output",
+            },
+            v.unit.unwrap_or(""),
+            xml::escape(&start),
+            xml::escape(&v.description)
+        ));
+    }
+    format!(
+        "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>sphfmu: {name}</title></head><body>\n\
+<h1>sphfmu — {name} (FMI {fmi} co-simulation)</h1>\n<p>{desc}</p>\n\
+<p>Smoothed-particle hydrodynamics as a co-simulation FMU. Inputs are held over a communication \
+step (an externally driven body moves on at the velocity it was given); the FMU sub-steps with \
+its own stable time step and lands on the step end exactly. FMU state get/set and serialization \
+restore the solver bit for bit. Case files of the repository's <code>models/</code> are under \
+<code>resources/</code>; the <code>case</code> parameter selects one with the same bodies, probes \
+and markers (or an absolute path).</p>\n\
+<table border=\"1\" cellpadding=\"3\"><tr><th>Variable</th><th>Type</th><th>Causality</th><th>Unit</th><th>Start</th><th>Meaning</th></tr>\n{rows}</table>\n</body></html>\n",
+        name = xml::escape(&case.case.name),
+        desc = xml::escape(&case.case.description),
+    )
+}
+
+fn write_fmu(
+    path: &Path,
+    md: &str,
+    platform: &str,
+    lib: &[u8],
+    resources: &[(String, Vec<u8>)],
+    docs: &[(&str, String)],
+) -> Result<(), String> {
+    let file = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut z = zip::ZipWriter::new(file);
+    let opts = zip::write::SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated)
+        .unix_permissions(0o644);
+    let mut put = |name: &str, data: &[u8], mode: u32| -> Result<(), String> {
+        z.start_file(name, opts.unix_permissions(mode))
+            .map_err(|e| e.to_string())?;
+        z.write_all(data).map_err(|e| e.to_string())
+    };
+    put("modelDescription.xml", md.as_bytes(), 0o644)?;
+    put(
+        &format!("binaries/{platform}/{MODEL_IDENTIFIER}.so"),
+        lib,
+        0o755,
+    )?;
+    for (name, data) in resources {
+        put(&format!("resources/{name}"), data, 0o644)?;
+    }
+    for (name, html) in docs {
+        put(&format!("documentation/{name}"), html.as_bytes(), 0o644)?;
+    }
+    z.finish().map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+fn run() -> Result<(), String> {
+    let a = args()?;
+    let case = Case::load(&a.case).map_err(|e| format!("--case: {}", e.0))?;
+    let case_file = a
+        .case
+        .file_name()
+        .and_then(|n| n.to_str())
+        .ok_or("--case: not a file name")?
+        .to_string();
+    let table = Table::new(&case, &case_file);
+    let lib = std::fs::read(&a.lib).map_err(|e| format!("--lib {}: {e}", a.lib.display()))?;
+    let mut resources = vec![(
+        sphfmu_fmu::model::DEFAULT_CASE_FILE.to_string(),
+        format!("{case_file}\n").into_bytes(),
+    )];
+    let mut names: Vec<_> = std::fs::read_dir(&a.models)
+        .map_err(|e| format!("--models {}: {e}", a.models.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    names.sort();
+    for p in names {
+        let n = p
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or_default()
+            .to_string();
+        resources.push((n, std::fs::read(&p).map_err(|e| e.to_string())?));
+    }
+    if !resources.iter().any(|(n, _)| *n == case_file) {
+        resources.push((
+            case_file.clone(),
+            std::fs::read(&a.case).map_err(|e| e.to_string())?,
+        ));
+    }
+    let exp = Experiment {
+        stop_time: case.time.t_end,
+        step_size: case.time.t_end / 200.0,
+        description: if case.case.description.is_empty() {
+            case.case.name.clone()
+        } else {
+            case.case.description.clone()
+        },
+    };
+    std::fs::create_dir_all(&a.out).map_err(|e| format!("--out: {e}"))?;
+    let fmu3 = a.out.join("sphfmu.fmu");
+    write_fmu(
+        &fmu3,
+        &xml::fmi3(&table, &exp),
+        "x86_64-linux",
+        &lib,
+        &resources,
+        &[("index.html", documentation(&table, &case, "3.0"))],
+    )?;
+    let fmu2 = a.out.join("sphfmu-fmi2.fmu");
+    let doc2 = documentation(&table, &case, "2.0");
+    write_fmu(
+        &fmu2,
+        &xml::fmi2(&table, &exp),
+        "linux64",
+        &lib,
+        &resources,
+        &[("_main.html", doc2.clone()), ("index.html", doc2)],
+    )?;
+    println!(
+        "wrote {} and {} ({} variables, case {case_file})",
+        fmu3.display(),
+        fmu2.display(),
+        table.variables.len()
+    );
+    Ok(())
+}
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("sphfmu-package: {e}");
+        std::process::exit(2);
+    }
+}

@@ -1,0 +1,73 @@
+//! What both C faces share: panic containment and C strings.
+
+use crate::model::Status;
+use std::ffi::{c_char, CStr};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+/// Run `f`; a panic becomes `Fatal` instead of unwinding into the master (which would abort
+/// its process).
+pub fn guard(f: impl FnOnce() -> Status) -> Status {
+    catch_unwind(AssertUnwindSafe(f)).unwrap_or(Status::Fatal)
+}
+
+/// A C string argument, or None for NULL / invalid UTF-8.
+///
+/// # Safety
+/// `p` is NULL or points to a NUL-terminated string.
+pub unsafe fn text<'a>(p: *const c_char) -> Option<&'a str> {
+    if p.is_null() {
+        None
+    } else {
+        CStr::from_ptr(p).to_str().ok()
+    }
+}
+
+/// Turn a file URI (FMI 2.0 `fmuResourceLocation`) into a path: `file:///a/b`,
+/// `file:/a/b`, `file://localhost/a/b`, with %XX escapes.
+pub fn uri_to_path(uri: &str) -> Option<String> {
+    let rest = uri.strip_prefix("file:")?;
+    let rest = rest
+        .strip_prefix("//localhost")
+        .or_else(|| rest.strip_prefix("//"))
+        .unwrap_or(rest);
+    let mut out = Vec::new();
+    let b = rest.as_bytes();
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' && i + 2 < b.len() {
+            let hex = std::str::from_utf8(&b[i + 1..i + 3]).ok()?;
+            out.push(u8::from_str_radix(hex, 16).ok()?);
+            i += 3;
+        } else {
+            out.push(b[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
+/// A slice from a C array (empty for n = 0, whatever the pointer).
+///
+/// # Safety
+/// `p` points to `n` valid elements when n > 0.
+pub unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
+    if n == 0 {
+        Some(&[])
+    } else if p.is_null() {
+        None
+    } else {
+        Some(std::slice::from_raw_parts(p, n))
+    }
+}
+
+/// # Safety
+/// `p` points to `n` writable elements when n > 0.
+pub unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
+    if n == 0 {
+        Some(&mut [])
+    } else if p.is_null() {
+        None
+    } else {
+        Some(std::slice::from_raw_parts_mut(p, n))
+    }
+}

@@ -1,0 +1,15 @@
+//! sphfmu as an FMU: the FMI 3.0 and FMI 2.0 co-simulation C APIs over the library's
+//! `Coupling` interface, hand-written (rust-fmi's exporter is FMI 3.0 only and aborts on FMU
+//! state calls, see ../shared/spec/fmi-zenoh.md). One binary exports both APIs; the packager
+//! (`src/bin/package.rs`, `make fmu`) writes `sphfmu.fmu` (3.0) and `sphfmu-fmi2.fmu` (2.0)
+//! around it.
+//!
+//! No global mutable state: everything lives in the instance the master holds, each with its
+//! own rayon pool; every entry point catches panics.
+
+pub mod ffi;
+pub mod fmi2;
+pub mod fmi3;
+pub mod model;
+pub mod table;
+pub mod xml;

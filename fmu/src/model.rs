@@ -1,0 +1,632 @@
+//! One FMU instance behind both FMI faces: the state machine, parameters, inputs, outputs,
+//! FMU states. `fmi2.rs` and `fmi3.rs` only translate C arguments and status codes.
+
+use crate::table::{Binding, Causality, Kind, Param, Start, Table};
+use sphfmu::case::Case;
+use sphfmu::coupling::{BodyKinematics, Coupling, CouplingOptions};
+use std::path::{Path, PathBuf};
+
+/// FMI status codes (the same numbers in FMI 2.0 and 3.0).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+#[repr(i32)]
+pub enum Status {
+    Ok = 0,
+    Warning = 1,
+    Discard = 2,
+    Error = 3,
+    Fatal = 4,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    Instantiated,
+    Initialization,
+    Step,
+    Terminated,
+    /// A call failed with Error: only get/set FMU state, reset, terminate? no: reset and free.
+    Failed,
+}
+
+/// Messages go through the master's callback: (status, category, message).
+pub type Logger = Box<dyn Fn(Status, &str, &str)>;
+
+/// The file in resources/ naming the packaged case.
+pub const DEFAULT_CASE_FILE: &str = "default-case.txt";
+
+#[derive(Debug, Clone, PartialEq)]
+struct Params {
+    case: String,
+    scheme: String,
+    resolution: f64,
+    cfl: f64,
+    threads: i64,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+struct Inputs {
+    gravity: [f64; 3],
+    /// Per externally driven body (order of `Table::external_bodies`).
+    bodies: Vec<BodyKinematics>,
+}
+
+/// A saved FMU state: the solver's bytes plus what the instance keeps beside them.
+pub struct Snapshot {
+    inputs: Inputs,
+    start_time: f64,
+    solver: Vec<u8>,
+}
+
+pub struct Instance {
+    pub name: String,
+    resources: PathBuf,
+    packaged: Case,
+    pub table: Table,
+    params: Params,
+    inputs: Inputs,
+    coupling: Option<Coupling>,
+    pub mode: Mode,
+    start_time: f64,
+    logger: Logger,
+    logging_on: bool,
+    categories: Vec<String>,
+}
+
+/// A rejected call: its status and the message logged for it.
+pub type CallResult<T> = Result<T, (Status, String)>;
+
+fn err<T>(msg: impl Into<String>) -> CallResult<T> {
+    Err((Status::Error, msg.into()))
+}
+
+impl Instance {
+    /// Read the packaged case named by resources/default-case.txt and build the table.
+    pub fn new(name: &str, resources: &Path, logger: Logger) -> Result<Instance, String> {
+        let marker = resources.join(DEFAULT_CASE_FILE);
+        let case_file = std::fs::read_to_string(&marker)
+            .map_err(|e| {
+                format!(
+                    "resources: cannot read {} ({e}); is this the packaged FMU's resources folder?",
+                    marker.display()
+                )
+            })?
+            .trim()
+            .to_string();
+        let packaged = Case::load(&resources.join(&case_file))
+            .map_err(|e| format!("resources/{case_file}: {}", e.0))?;
+        let table = Table::new(&packaged, &case_file);
+        let params = Params {
+            case: case_file,
+            scheme: String::new(),
+            resolution: 1.0,
+            cfl: 0.0,
+            threads: 0,
+        };
+        let inputs = start_inputs(&table);
+        Ok(Instance {
+            name: name.to_string(),
+            resources: resources.to_path_buf(),
+            packaged,
+            table,
+            params,
+            inputs,
+            coupling: None,
+            mode: Mode::Instantiated,
+            start_time: 0.0,
+            logger,
+            logging_on: false,
+            categories: vec![],
+        })
+    }
+
+    /// Log through the master: errors always, the rest when logging is on for the category.
+    pub fn log(&self, status: Status, category: &str, msg: &str) {
+        let wanted = status >= Status::Error
+            || (self.logging_on
+                && (self.categories.is_empty() || self.categories.iter().any(|c| c == category)));
+        if wanted {
+            (self.logger)(status, category, msg);
+        }
+    }
+
+    pub fn set_debug_logging(&mut self, on: bool, categories: Vec<String>) -> CallResult<()> {
+        for c in &categories {
+            if !crate::xml::LOG_CATEGORIES.iter().any(|(n, _)| n == c) {
+                return err(format!(
+                    "setDebugLogging: unknown category {c:?} (known: logEvents, logStatusWarning, logStatusError, logSolver)"
+                ));
+            }
+        }
+        self.logging_on = on;
+        self.categories = categories;
+        Ok(())
+    }
+
+    fn expect_mode(&self, call: &str, allowed: &[Mode]) -> CallResult<()> {
+        if allowed.contains(&self.mode) {
+            Ok(())
+        } else {
+            err(format!("{call}: not allowed in state {:?}", self.mode))
+        }
+    }
+
+    pub fn enter_initialization(&mut self, start_time: f64) -> CallResult<()> {
+        self.expect_mode("enterInitializationMode", &[Mode::Instantiated])?;
+        if !start_time.is_finite() {
+            return err(format!(
+                "enterInitializationMode: startTime must be finite, got {start_time}"
+            ));
+        }
+        self.start_time = start_time;
+        self.mode = Mode::Initialization;
+        self.log(
+            Status::Ok,
+            "logEvents",
+            &format!("initialisation at t = {start_time}"),
+        );
+        Ok(())
+    }
+
+    pub fn exit_initialization(&mut self) -> CallResult<()> {
+        self.expect_mode("exitInitializationMode", &[Mode::Initialization])?;
+        self.ensure_coupling()?;
+        self.apply_inputs()?;
+        self.mode = Mode::Step;
+        let c = self.coupling.as_ref().expect("built above");
+        let d = c.diagnostics();
+        self.log(
+            Status::Ok,
+            "logEvents",
+            &format!(
+                "case {:?} ready: {} particles, {}D, scheme {}",
+                self.params.case,
+                d.particles,
+                c.dimension(),
+                if self.params.scheme.trim().is_empty() {
+                    "of the case"
+                } else {
+                    self.params.scheme.trim()
+                }
+            ),
+        );
+        Ok(())
+    }
+
+    /// Build the solver from the parameters (when not built yet).
+    fn ensure_coupling(&mut self) -> CallResult<()> {
+        if self.coupling.is_some() {
+            return Ok(());
+        }
+        let p = &self.params;
+        let path = if Path::new(&p.case).is_absolute() {
+            PathBuf::from(&p.case)
+        } else {
+            self.resources.join(&p.case)
+        };
+        let case = Case::load(&path).map_err(|e| (Status::Error, format!("case: {}", e.0)))?;
+        self.table
+            .accepts(&self.packaged, &case)
+            .map_err(|e| (Status::Error, format!("case {:?} has {e}", p.case)))?;
+        let options = CouplingOptions {
+            scheme: (!p.scheme.trim().is_empty()).then(|| p.scheme.clone()),
+            resolution: p.resolution,
+            cfl: (p.cfl != 0.0).then_some(p.cfl),
+            threads: p.threads as usize,
+        };
+        let c = Coupling::new(&case, &options).map_err(|e| (Status::Error, e.0))?;
+        self.coupling = Some(c);
+        Ok(())
+    }
+
+    /// Hand the inputs to the solver (it ignores unchanged values).
+    fn apply_inputs(&mut self) -> CallResult<()> {
+        let c = self.coupling.as_mut().expect("coupling built");
+        c.set_gravity(self.inputs.gravity)
+            .map_err(|e| (Status::Error, e.0))?;
+        for (k, &b) in self.table.external_bodies.iter().enumerate() {
+            c.set_body_kinematics(b, &self.inputs.bodies[k])
+                .map_err(|e| (Status::Error, e.0))?;
+        }
+        Ok(())
+    }
+
+    pub fn time(&self) -> f64 {
+        self.start_time + self.coupling.as_ref().map(|c| c.time()).unwrap_or(0.0)
+    }
+
+    pub fn do_step(&mut self, current: f64, h: f64) -> CallResult<()> {
+        self.expect_mode("doStep", &[Mode::Step])?;
+        let now = self.time();
+        if !(h.is_finite() && h > 0.0) {
+            return err(format!(
+                "doStep: communicationStepSize must be finite and > 0, got {h}"
+            ));
+        }
+        if !current.is_finite() || (current - now).abs() > 1e-9 * now.abs().max(1.0) {
+            return err(format!(
+                "doStep: currentCommunicationPoint {current} is not the FMU's time {now}"
+            ));
+        }
+        self.apply_inputs()?;
+        let target = current + h - self.start_time;
+        let c = self.coupling.as_mut().expect("coupling built in step mode");
+        match c.step_to(target) {
+            Ok(r) => {
+                let msg = format!(
+                    "doStep to t = {}: {} internal steps, dt in [{:.3e}, {:.3e}]",
+                    current + h,
+                    r.steps,
+                    r.dt_min,
+                    r.dt_max
+                );
+                self.log(Status::Ok, "logSolver", &msg);
+                Ok(())
+            }
+            Err(e) => {
+                self.mode = Mode::Failed;
+                err(format!(
+                    "doStep: the solver failed ({e}); restore a saved FMU state or reset"
+                ))
+            }
+        }
+    }
+
+    pub fn terminate(&mut self) -> CallResult<()> {
+        self.expect_mode(
+            "terminate",
+            &[Mode::Step, Mode::Initialization, Mode::Failed],
+        )?;
+        self.mode = Mode::Terminated;
+        self.log(Status::Ok, "logEvents", "terminated");
+        Ok(())
+    }
+
+    /// Back to the state after instantiation: start values, no solver.
+    pub fn reset(&mut self) {
+        self.coupling = None;
+        self.params = Params {
+            case: match &self.table.variables[1].start {
+                Start::Text(t) => t.clone(),
+                _ => unreachable!("variable 1 is the case parameter"),
+            },
+            scheme: String::new(),
+            resolution: 1.0,
+            cfl: 0.0,
+            threads: 0,
+        };
+        self.inputs = start_inputs(&self.table);
+        self.start_time = 0.0;
+        self.mode = Mode::Instantiated;
+        self.log(Status::Ok, "logEvents", "reset");
+    }
+
+    // ---- values ------------------------------------------------------------------------
+
+    /// Run a multi-variable set so that a rejected value leaves every value as it was.
+    pub fn atomically(&mut self, f: impl FnOnce(&mut Self) -> CallResult<()>) -> CallResult<()> {
+        let (params, inputs) = (self.params.clone(), self.inputs.clone());
+        let r = f(self);
+        if r.is_err() {
+            if self.params != params {
+                self.coupling = None;
+            }
+            self.params = params;
+            self.inputs = inputs;
+        }
+        r
+    }
+
+    /// Check that variable `i` may be set now; parameters only before step mode.
+    fn settable(&self, i: usize) -> CallResult<()> {
+        let v = &self.table.variables[i];
+        match v.causality {
+            Causality::Parameter => self.expect_mode(
+                &format!("set {}", v.name),
+                &[Mode::Instantiated, Mode::Initialization],
+            ),
+            Causality::Input => self.expect_mode(
+                &format!("set {}", v.name),
+                &[Mode::Instantiated, Mode::Initialization, Mode::Step],
+            ),
+            _ => err(format!(
+                "{}: is not a parameter or input (causality {:?}), it cannot be set",
+                v.name, v.causality
+            )),
+        }
+    }
+
+    /// Set elements `elems` of Float64 variable `i` (checked first, then stored: a rejected
+    /// call changes nothing).
+    pub fn set_f64(&mut self, i: usize, first: usize, values: &[f64]) -> CallResult<()> {
+        self.settable(i)?;
+        let v = &self.table.variables[i];
+        let name = v.name.clone();
+        if let Some(x) = values.iter().find(|x| !x.is_finite()) {
+            return err(format!("{name}: must be finite, got {x}"));
+        }
+        let put = |dst: &mut [f64; 3]| dst[first..first + values.len()].copy_from_slice(values);
+        let ext = |b: usize| {
+            self.table
+                .external_bodies
+                .iter()
+                .position(|&x| x == b)
+                .expect("table lists it")
+        };
+        match v.binding {
+            Binding::Param(Param::Resolution) => {
+                let r = values[0];
+                if !(0.1..=10.0).contains(&r) {
+                    return err(format!("resolution: must be in [0.1, 10], got {r}"));
+                }
+                self.params.resolution = r;
+                self.coupling = None;
+            }
+            Binding::Param(Param::Cfl) => {
+                let c = values[0];
+                if !(0.0..=1.0).contains(&c) {
+                    return err(format!(
+                        "cfl: must be in (0, 1] or 0 for the case's, got {c}"
+                    ));
+                }
+                self.params.cfl = c;
+                self.coupling = None;
+            }
+            Binding::Gravity => {
+                let mut g = self.inputs.gravity;
+                put(&mut g);
+                for (k, x) in g.iter().enumerate() {
+                    if k >= self.table.dimension && *x != 0.0 {
+                        return err(format!(
+                            "gravity[{}]: must be 0 in a {}D case, got {x}",
+                            k + 1,
+                            self.table.dimension
+                        ));
+                    }
+                }
+                self.inputs.gravity = g;
+            }
+            Binding::BodyPosition(b) => put(&mut self.inputs.bodies[ext(b)].position),
+            Binding::BodyVelocity(b) => put(&mut self.inputs.bodies[ext(b)].velocity),
+            Binding::BodyAngle(b) => self.inputs.bodies[ext(b)].angle = values[0],
+            Binding::BodyAngularVelocity(b) => {
+                self.inputs.bodies[ext(b)].angular_velocity = values[0]
+            }
+            _ => return err(format!("{name}: cannot be set")),
+        }
+        Ok(())
+    }
+
+    pub fn set_i64(&mut self, i: usize, value: i64) -> CallResult<()> {
+        self.settable(i)?;
+        match self.table.variables[i].binding {
+            Binding::Param(Param::Threads) => {
+                if !(0..=1024).contains(&value) {
+                    return err(format!("threads: must be in [0, 1024], got {value}"));
+                }
+                self.params.threads = value;
+                self.coupling = None;
+                Ok(())
+            }
+            _ => err(format!("{}: cannot be set", self.table.variables[i].name)),
+        }
+    }
+
+    pub fn set_string(&mut self, i: usize, value: &str) -> CallResult<()> {
+        self.settable(i)?;
+        match self.table.variables[i].binding {
+            Binding::Param(Param::Case) => {
+                if value.trim().is_empty() {
+                    return err("case: must name a case file, got an empty string");
+                }
+                self.params.case = value.to_string();
+            }
+            Binding::Param(Param::Scheme) => self.params.scheme = value.to_string(),
+            _ => return err(format!("{}: cannot be set", self.table.variables[i].name)),
+        }
+        self.coupling = None;
+        Ok(())
+    }
+
+    /// All elements of Float64 variable `i`.
+    pub fn get_f64(&mut self, i: usize) -> CallResult<Vec<f64>> {
+        let v = &self.table.variables[i];
+        let b = v.binding;
+        let ext = |b: usize| {
+            self.table
+                .external_bodies
+                .iter()
+                .position(|&x| x == b)
+                .expect("table lists it")
+        };
+        Ok(match b {
+            Binding::Time => vec![self.time()],
+            Binding::Param(Param::Resolution) => vec![self.params.resolution],
+            Binding::Param(Param::Cfl) => vec![self.params.cfl],
+            Binding::Gravity => self.inputs.gravity.to_vec(),
+            Binding::BodyPosition(b) => self.inputs.bodies[ext(b)].position.to_vec(),
+            Binding::BodyVelocity(b) => self.inputs.bodies[ext(b)].velocity.to_vec(),
+            Binding::BodyAngle(b) => vec![self.inputs.bodies[ext(b)].angle],
+            Binding::BodyAngularVelocity(b) => vec![self.inputs.bodies[ext(b)].angular_velocity],
+            _ => {
+                if v.causality != Causality::Output {
+                    return err(format!("{}: not a Float64 value", v.name));
+                }
+                self.output(i)?
+            }
+        })
+    }
+
+    fn output(&mut self, i: usize) -> CallResult<Vec<f64>> {
+        if !matches!(
+            self.mode,
+            Mode::Initialization | Mode::Step | Mode::Terminated | Mode::Failed
+        ) {
+            return err(format!(
+                "{}: outputs are available from initialisation mode on (state {:?})",
+                self.table.variables[i].name, self.mode
+            ));
+        }
+        self.ensure_coupling()?;
+        let c = self.coupling.as_ref().expect("built above");
+        let b = self.table.variables[i].binding;
+        let d = || c.diagnostics();
+        Ok(match b {
+            Binding::BodyForce(k) => c.loads()[k].force.to_vec(),
+            Binding::BodyTorque(k) => c.loads()[k].torque.to_vec(),
+            Binding::ProbeDensity(k) => vec![c.probes()[k].density],
+            Binding::ProbePressure(k) => vec![c.probes()[k].pressure],
+            Binding::ProbeVelocity(k) => c.probes()[k].velocity.to_vec(),
+            Binding::ProbeCoverage(k) => vec![c.probes()[k].coverage],
+            Binding::Marker(k) => vec![c.markers()[k]],
+            Binding::Dt => vec![d().dt],
+            Binding::Mass => vec![d().mass],
+            Binding::Momentum => d().momentum.to_vec(),
+            Binding::Energy => vec![d().total_energy],
+            Binding::Steps => vec![d().step as f64],
+            Binding::Particles => vec![d().particles as f64],
+            _ => unreachable!("inputs and parameters are answered by get_f64"),
+        })
+    }
+
+    pub fn get_i64(&mut self, i: usize) -> CallResult<i64> {
+        let v = &self.table.variables[i];
+        match v.binding {
+            Binding::Param(Param::Threads) => Ok(self.params.threads),
+            Binding::Steps | Binding::Particles => Ok(self.output(i)?[0] as i64),
+            _ => err(format!("{}: not an integer", v.name)),
+        }
+    }
+
+    pub fn get_string(&self, i: usize) -> CallResult<String> {
+        match self.table.variables[i].binding {
+            Binding::Param(Param::Case) => Ok(self.params.case.clone()),
+            Binding::Param(Param::Scheme) => Ok(self.params.scheme.clone()),
+            _ => err(format!("{}: not a string", self.table.variables[i].name)),
+        }
+    }
+
+    /// Variable index of FMI 3.0 value reference `vr` of kind `kind`.
+    pub fn var3(&self, vr: u32, kind: Kind) -> CallResult<usize> {
+        match self.table.variables.get(vr as usize) {
+            Some(v) if v.kind == kind => Ok(vr as usize),
+            Some(v) => err(format!(
+                "valueReference {vr} ({}) is {:?}, not {kind:?}",
+                v.name, v.kind
+            )),
+            None => err(format!(
+                "valueReference {vr}: no such variable (0..{})",
+                self.table.variables.len()
+            )),
+        }
+    }
+
+    // ---- FMU state ---------------------------------------------------------------------
+
+    pub fn get_state(&self) -> CallResult<Snapshot> {
+        let Some(c) = &self.coupling else {
+            return err(
+                "getFMUState: available once initialisation has ended (no solver state yet)",
+            );
+        };
+        Ok(Snapshot {
+            inputs: self.inputs.clone(),
+            start_time: self.start_time,
+            solver: c.save(),
+        })
+    }
+
+    pub fn set_state(&mut self, s: &Snapshot) -> CallResult<()> {
+        self.expect_mode(
+            "setFMUState",
+            &[Mode::Step, Mode::Failed, Mode::Initialization],
+        )?;
+        self.ensure_coupling()?;
+        if s.inputs.bodies.len() != self.table.external_bodies.len() {
+            return err("setFMUState: the state belongs to another model (body inputs differ)");
+        }
+        let c = self.coupling.as_mut().expect("built above");
+        c.restore(&s.solver)
+            .map_err(|e| (Status::Error, format!("setFMUState: {}", e.0)))?;
+        self.inputs = s.inputs.clone();
+        self.start_time = s.start_time;
+        self.mode = Mode::Step;
+        Ok(())
+    }
+}
+
+fn start_inputs(table: &Table) -> Inputs {
+    let mut inputs = Inputs {
+        gravity: [0.0; 3],
+        bodies: vec![BodyKinematics::default(); table.external_bodies.len()],
+    };
+    for v in &table.variables {
+        if let (Causality::Input, Start::Float(x)) = (v.causality, &v.start) {
+            match v.binding {
+                Binding::Gravity => inputs.gravity.copy_from_slice(x),
+                Binding::BodyPosition(b) => {
+                    let k = table
+                        .external_bodies
+                        .iter()
+                        .position(|&e| e == b)
+                        .expect("listed");
+                    inputs.bodies[k].position.copy_from_slice(x);
+                }
+                _ => {}
+            }
+        }
+    }
+    inputs
+}
+
+impl Snapshot {
+    /// Bytes: gravity, start time, then per body 8 numbers, then the solver's state.
+    pub fn serialize(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        let mut put = |x: f64| out.extend_from_slice(&x.to_le_bytes());
+        self.inputs.gravity.iter().for_each(|x| put(*x));
+        put(self.start_time);
+        put(self.inputs.bodies.len() as f64);
+        for b in &self.inputs.bodies {
+            b.position.iter().chain(&b.velocity).for_each(|x| put(*x));
+            put(b.angle);
+            put(b.angular_velocity);
+        }
+        out.extend_from_slice(&self.solver);
+        out
+    }
+
+    pub fn deserialize(bytes: &[u8]) -> Result<Snapshot, String> {
+        let mut at = 0;
+        let mut get = || -> Result<f64, String> {
+            let b = bytes
+                .get(at..at + 8)
+                .ok_or("serialized FMU state: too short")?;
+            at += 8;
+            Ok(f64::from_le_bytes(b.try_into().expect("8 bytes")))
+        };
+        let mut gravity = [0.0; 3];
+        for g in &mut gravity {
+            *g = get()?;
+        }
+        let start_time = get()?;
+        let n = get()?;
+        if !(0.0..=65535.0).contains(&n) || n.fract() != 0.0 {
+            return Err("serialized FMU state: damaged body count".into());
+        }
+        let mut bodies = vec![];
+        for _ in 0..n as usize {
+            let mut k = BodyKinematics::default();
+            for x in k.position.iter_mut().chain(k.velocity.iter_mut()) {
+                *x = get()?;
+            }
+            k.angle = get()?;
+            k.angular_velocity = get()?;
+            bodies.push(k);
+        }
+        let used = 8 * (5 + 8 * n as usize);
+        Ok(Snapshot {
+            inputs: Inputs { gravity, bodies },
+            start_time,
+            solver: bytes[used..].to_vec(),
+        })
+    }
+}

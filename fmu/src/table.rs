@@ -1,0 +1,493 @@
+//! The one table of FMU variables. Both modelDescription.xml files are written from it and
+//! every getter and setter dispatches through it, so the XML and the binary cannot disagree.
+//! It is a function of the packaged case (its dimension, bodies, probes and markers).
+//!
+//! FMI 3.0 sees 3-vectors as arrays (`<Dimension start="3"/>`, one value reference); FMI 2.0
+//! sees them flattened to `name[1]`, `name[2]`, `name[3]` (structured naming convention),
+//! each with its own value reference.
+
+use sphfmu::boundary::kinematics::Motion;
+use sphfmu::case::Case;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    Float64,
+    /// FMI 3.0 Int64, FMI 2.0 Integer.
+    Int64,
+    String,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Causality {
+    Independent,
+    Parameter,
+    Input,
+    Output,
+}
+
+/// Parameters (fixed: set before the end of initialisation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Param {
+    Case,
+    Scheme,
+    Resolution,
+    Cfl,
+    Threads,
+}
+
+/// What a variable reads or writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Binding {
+    Time,
+    Param(Param),
+    Gravity,
+    BodyPosition(usize),
+    BodyAngle(usize),
+    BodyVelocity(usize),
+    BodyAngularVelocity(usize),
+    BodyForce(usize),
+    BodyTorque(usize),
+    ProbeDensity(usize),
+    ProbePressure(usize),
+    ProbeVelocity(usize),
+    ProbeCoverage(usize),
+    Marker(usize),
+    Steps,
+    Dt,
+    Particles,
+    Mass,
+    Momentum,
+    Energy,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum Start {
+    None,
+    Float(Vec<f64>),
+    Int(i64),
+    Text(String),
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Variable {
+    pub name: String,
+    /// FMI 3.0 value reference (FMI 2.0 ones are in `Table::fmi2`).
+    pub vr: u32,
+    pub kind: Kind,
+    pub causality: Causality,
+    /// 1 or 3 (a 3-vector).
+    pub size: usize,
+    pub start: Start,
+    pub unit: Option<&'static str>,
+    pub description: String,
+    pub binding: Binding,
+}
+
+impl Variable {
+    pub fn is_discrete(&self) -> bool {
+        self.kind != Kind::Float64
+            || matches!(
+                self.binding,
+                Binding::Steps | Binding::Dt | Binding::Particles
+            )
+    }
+}
+
+/// One FMI 2.0 scalar: element `element` of `variables[variable]`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Scalar2 {
+    pub variable: usize,
+    pub element: usize,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Table {
+    pub variables: Vec<Variable>,
+    /// FMI 2.0 value reference r is `fmi2[r]`.
+    pub fmi2: Vec<Scalar2>,
+    pub dimension: usize,
+    /// Bodies driven from outside (index into the case's bodies).
+    pub external_bodies: Vec<usize>,
+}
+
+/// Units by dimension: a 2D case is per metre of depth.
+struct Units {
+    force: &'static str,
+    torque: &'static str,
+    mass: &'static str,
+    momentum: &'static str,
+    energy: &'static str,
+}
+
+fn units(dimension: usize) -> Units {
+    match dimension {
+        1 => Units {
+            force: "N/m2",
+            torque: "N/m",
+            mass: "kg/m2",
+            momentum: "kg/(m.s)",
+            energy: "J/m2",
+        },
+        2 => Units {
+            force: "N/m",
+            torque: "N",
+            mass: "kg/m",
+            momentum: "kg/s",
+            energy: "J/m",
+        },
+        _ => Units {
+            force: "N",
+            torque: "N.m",
+            mass: "kg",
+            momentum: "kg.m/s",
+            energy: "J",
+        },
+    }
+}
+
+/// Every unit a table may use, with its SI base-unit exponents (kg, m, s), for
+/// `<UnitDefinitions>`.
+pub const UNITS: &[(&str, [i32; 3])] = &[
+    ("s", [0, 0, 1]),
+    ("m", [0, 1, 0]),
+    ("m/s", [0, 1, -1]),
+    ("m/s2", [0, 1, -2]),
+    ("rad", [0, 0, 0]),
+    ("rad/s", [0, 0, -1]),
+    ("Pa", [1, -1, -2]),
+    ("kg/m3", [1, -3, 0]),
+    ("N/m2", [1, -1, -2]),
+    ("N/m", [1, 0, -2]),
+    ("N", [1, 1, -2]),
+    ("N.m", [1, 2, -2]),
+    ("kg/m2", [1, -2, 0]),
+    ("kg/m", [1, -1, 0]),
+    ("kg", [1, 0, 0]),
+    ("kg/(m.s)", [1, -1, -1]),
+    ("kg/s", [1, 0, -1]),
+    ("kg.m/s", [1, 1, -1]),
+    ("J/m2", [1, 0, -2]),
+    ("J/m", [1, 1, -2]),
+    ("J", [1, 2, -2]),
+];
+
+fn pad3(v: &[f64]) -> Vec<f64> {
+    (0..3).map(|k| v.get(k).copied().unwrap_or(0.0)).collect()
+}
+
+impl Table {
+    /// The variables of `case` (as packaged; `case_file` is the `case` parameter's start).
+    pub fn new(case: &Case, case_file: &str) -> Table {
+        let d = case.case.dimension;
+        let u = units(d);
+        let mut v: Vec<Variable> = vec![];
+        let mut add = |name: String,
+                       kind: Kind,
+                       causality: Causality,
+                       size: usize,
+                       start: Start,
+                       unit: Option<&'static str>,
+                       description: String,
+                       binding: Binding| {
+            let vr = v.len() as u32;
+            v.push(Variable {
+                name,
+                vr,
+                kind,
+                causality,
+                size,
+                start,
+                unit,
+                description,
+                binding,
+            });
+        };
+        use Causality::*;
+        add(
+            "time".into(),
+            Kind::Float64,
+            Independent,
+            1,
+            Start::None,
+            Some("s"),
+            "Simulation time".into(),
+            Binding::Time,
+        );
+        add("case".into(), Kind::String, Parameter, 1, Start::Text(case_file.into()), None,
+            "Case file: a name in the FMU's resources/ folder or an absolute path; it must have the packaged case's bodies, probes and markers".into(),
+            Binding::Param(Param::Case));
+        add("scheme".into(), Kind::String, Parameter, 1, Start::Text(String::new()), None,
+            "Scheme preset replacing the case's (with its own kernel and integrator): standard, rpsph, rosswog-f1..f4, crksph, compsph, compsph-cullen, psph; empty = the case's".into(),
+            Binding::Param(Param::Scheme));
+        add(
+            "resolution".into(),
+            Kind::Float64,
+            Parameter,
+            1,
+            Start::Float(vec![1.0]),
+            None,
+            "Refinement factor on every particle spacing, in [0.1, 10] (2 = twice as fine)".into(),
+            Binding::Param(Param::Resolution),
+        );
+        add(
+            "cfl".into(),
+            Kind::Float64,
+            Parameter,
+            1,
+            Start::Float(vec![0.0]),
+            None,
+            "Courant factor in (0, 1]; 0 = the case's".into(),
+            Binding::Param(Param::Cfl),
+        );
+        add(
+            "threads".into(),
+            Kind::Int64,
+            Parameter,
+            1,
+            Start::Int(0),
+            None,
+            "Worker threads of this instance, in [0, 1024]; 0 = one per core".into(),
+            Binding::Param(Param::Threads),
+        );
+        add("gravity".into(), Kind::Float64, Input, 3,
+            Start::Float(pad3(case.gravity.as_deref().unwrap_or(&[]))), Some("m/s2"),
+            format!("Uniform gravity (entries beyond the case's {d} dimensions must be 0), held between steps"),
+            Binding::Gravity);
+        let mut external_bodies = vec![];
+        for (i, b) in case.bodies.iter().enumerate() {
+            if b.motion != Motion::External {
+                continue;
+            }
+            external_bodies.push(i);
+            let n = &b.name;
+            let r = pad3(b.reference.as_deref().unwrap_or(&[]));
+            add(
+                format!("{n}.position"),
+                Kind::Float64,
+                Input,
+                3,
+                Start::Float(r),
+                Some("m"),
+                format!("Position of body {n}'s reference point"),
+                Binding::BodyPosition(i),
+            );
+            add(
+                format!("{n}.angle"),
+                Kind::Float64,
+                Input,
+                1,
+                Start::Float(vec![0.0]),
+                Some("rad"),
+                format!("Rotation of body {n} about its axis (2D: about z)"),
+                Binding::BodyAngle(i),
+            );
+            add(format!("{n}.velocity"), Kind::Float64, Input, 3, Start::Float(vec![0.0; 3]), Some("m/s"),
+                format!("Velocity of body {n}'s reference point (the body moves on with it until the next step)"),
+                Binding::BodyVelocity(i));
+            add(
+                format!("{n}.angular_velocity"),
+                Kind::Float64,
+                Input,
+                1,
+                Start::Float(vec![0.0]),
+                Some("rad/s"),
+                format!("Angular velocity of body {n} about its axis"),
+                Binding::BodyAngularVelocity(i),
+            );
+        }
+        for (i, b) in case.bodies.iter().enumerate() {
+            let n = &b.name;
+            add(
+                format!("{n}.force"),
+                Kind::Float64,
+                Output,
+                3,
+                Start::None,
+                Some(u.force),
+                format!("Force of the fluid on body {n}"),
+                Binding::BodyForce(i),
+            );
+            add(
+                format!("{n}.torque"),
+                Kind::Float64,
+                Output,
+                3,
+                Start::None,
+                Some(u.torque),
+                format!(
+                    "Torque of the fluid on body {n} about its moved reference point (2D: z only)"
+                ),
+                Binding::BodyTorque(i),
+            );
+        }
+        for (i, p) in case.probes.iter().enumerate() {
+            let n = &p.name;
+            add(
+                format!("probe.{n}.density"),
+                Kind::Float64,
+                Output,
+                1,
+                Start::None,
+                Some("kg/m3"),
+                format!("Fluid density at probe {n}"),
+                Binding::ProbeDensity(i),
+            );
+            add(
+                format!("probe.{n}.pressure"),
+                Kind::Float64,
+                Output,
+                1,
+                Start::None,
+                Some("Pa"),
+                format!("Fluid pressure at probe {n}"),
+                Binding::ProbePressure(i),
+            );
+            add(
+                format!("probe.{n}.velocity"),
+                Kind::Float64,
+                Output,
+                3,
+                Start::None,
+                Some("m/s"),
+                format!("Fluid velocity at probe {n}"),
+                Binding::ProbeVelocity(i),
+            );
+            add(format!("probe.{n}.coverage"), Kind::Float64, Output, 1, Start::None, None,
+                format!("Kernel coverage at probe {n}: about 1 in the fluid, 0 where no fluid reaches (values then 0)"),
+                Binding::ProbeCoverage(i));
+        }
+        for (i, m) in case.markers.iter().enumerate() {
+            add(
+                format!("marker.{}.pressure", m.name),
+                Kind::Float64,
+                Output,
+                1,
+                Start::None,
+                Some("Pa"),
+                format!("Wall pressure at marker {} on body {}", m.name, m.body),
+                Binding::Marker(i),
+            );
+        }
+        add(
+            "diag.steps".into(),
+            Kind::Int64,
+            Output,
+            1,
+            Start::None,
+            None,
+            "Solver steps since the start".into(),
+            Binding::Steps,
+        );
+        add(
+            "diag.dt".into(),
+            Kind::Float64,
+            Output,
+            1,
+            Start::None,
+            Some("s"),
+            "Latest internal time step".into(),
+            Binding::Dt,
+        );
+        add(
+            "diag.particles".into(),
+            Kind::Int64,
+            Output,
+            1,
+            Start::None,
+            None,
+            "Particles (fluid and wall)".into(),
+            Binding::Particles,
+        );
+        add(
+            "diag.mass".into(),
+            Kind::Float64,
+            Output,
+            1,
+            Start::None,
+            Some(u.mass),
+            "Fluid mass".into(),
+            Binding::Mass,
+        );
+        add(
+            "diag.momentum".into(),
+            Kind::Float64,
+            Output,
+            3,
+            Start::None,
+            Some(u.momentum),
+            "Fluid momentum".into(),
+            Binding::Momentum,
+        );
+        add(
+            "diag.energy".into(),
+            Kind::Float64,
+            Output,
+            1,
+            Start::None,
+            Some(u.energy),
+            "Fluid kinetic plus internal energy".into(),
+            Binding::Energy,
+        );
+        let mut fmi2 = vec![];
+        for (i, var) in v.iter().enumerate() {
+            for element in 0..var.size {
+                fmi2.push(Scalar2 {
+                    variable: i,
+                    element,
+                });
+            }
+        }
+        Table {
+            variables: v,
+            fmi2,
+            dimension: d,
+            external_bodies,
+        }
+    }
+
+    /// The FMI 2.0 name of a scalar.
+    pub fn fmi2_name(&self, s: &Scalar2) -> String {
+        let v = &self.variables[s.variable];
+        if v.size == 1 {
+            v.name.clone()
+        } else {
+            format!("{}[{}]", v.name, s.element + 1)
+        }
+    }
+
+    /// Whether another case can run behind this table: same dimension, bodies (names, and
+    /// which are driven from outside), probes and markers. The reason when not.
+    pub fn accepts(&self, packaged: &Case, other: &Case) -> Result<(), String> {
+        let sig = |c: &Case| {
+            (
+                c.case.dimension,
+                c.bodies
+                    .iter()
+                    .map(|b| (b.name.clone(), b.motion == Motion::External))
+                    .collect::<Vec<_>>(),
+                c.probes.iter().map(|p| p.name.clone()).collect::<Vec<_>>(),
+                c.markers.iter().map(|m| m.name.clone()).collect::<Vec<_>>(),
+            )
+        };
+        let (a, b) = (sig(packaged), sig(other));
+        if a.0 != b.0 {
+            return Err(format!(
+                "dimension {} (the FMU was packaged for {})",
+                b.0, a.0
+            ));
+        }
+        if a.1 != b.1 {
+            return Err(format!(
+                "bodies (name, driven from outside) {:?}; the FMU's variables are for {:?}",
+                b.1, a.1
+            ));
+        }
+        if a.2 != b.2 || a.3 != b.3 {
+            return Err(format!(
+                "probes {:?} and markers {:?}; the FMU's variables are for {:?} and {:?}",
+                b.2, b.3, a.2, a.3
+            ));
+        }
+        Ok(())
+    }
+}

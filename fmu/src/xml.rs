@@ -1,0 +1,281 @@
+//! modelDescription.xml for FMI 3.0 and FMI 2.0, written from the variable table.
+
+use crate::table::{Causality, Kind, Start, Table, Variable, UNITS};
+use std::fmt::Write;
+
+pub const MODEL_IDENTIFIER: &str = "sphfmu";
+pub const LOG_CATEGORIES: &[(&str, &str)] = &[
+    (
+        "logEvents",
+        "Instantiation, initialisation, parameters, reset, terminate",
+    ),
+    ("logStatusWarning", "Calls that return a warning"),
+    (
+        "logStatusError",
+        "Calls that return an error, with the cause",
+    ),
+    (
+        "logSolver",
+        "Step statistics: internal steps, smallest and largest dt per doStep",
+    ),
+];
+
+/// Run-time facts the XML carries besides the table.
+pub struct Experiment {
+    pub stop_time: f64,
+    pub step_size: f64,
+    pub description: String,
+}
+
+pub fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// Instantiation token / GUID: FNV-1a of the variable list, so an FMU binary refuses a
+/// modelDescription written for another case.
+pub fn token(table: &Table) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for v in &table.variables {
+        for b in format!(
+            "{}|{}|{:?}|{:?}|{};",
+            v.name, v.vr, v.kind, v.causality, v.size
+        )
+        .bytes()
+        {
+            h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+    let g = h.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    format!(
+        "{{{:08x}-{:04x}-{:04x}-{:04x}-{:012x}}}",
+        h >> 32,
+        (h >> 16) & 0xffff,
+        h & 0xffff,
+        g >> 48,
+        g & 0xffff_ffff_ffff
+    )
+}
+
+fn num(x: f64) -> String {
+    // shortest round-trip form
+    format!("{x:?}")
+}
+
+fn units_xml(out: &mut String) {
+    out.push_str("  <UnitDefinitions>\n");
+    for (name, [kg, m, s]) in UNITS {
+        let mut attrs = String::new();
+        for (k, e) in [("kg", kg), ("m", m), ("s", s)] {
+            if *e != 0 {
+                write!(attrs, " {k}=\"{e}\"").unwrap();
+            }
+        }
+        writeln!(
+            out,
+            "    <Unit name=\"{}\"><BaseUnit{attrs}/></Unit>",
+            escape(name)
+        )
+        .unwrap();
+    }
+    out.push_str("  </UnitDefinitions>\n");
+}
+
+fn log_categories(out: &mut String) {
+    out.push_str("  <LogCategories>\n");
+    for (n, d) in LOG_CATEGORIES {
+        writeln!(
+            out,
+            "    <Category name=\"{n}\" description=\"{}\"/>",
+            escape(d)
+        )
+        .unwrap();
+    }
+    out.push_str("  </LogCategories>\n");
+}
+
+fn causality(c: Causality) -> &'static str {
+    match c {
+        Causality::Independent => "independent",
+        Causality::Parameter => "parameter",
+        Causality::Input => "input",
+        Causality::Output => "output",
+    }
+}
+
+fn variability(v: &Variable) -> &'static str {
+    match v.causality {
+        Causality::Parameter => "fixed",
+        _ if v.is_discrete() => "discrete",
+        _ => "continuous",
+    }
+}
+
+pub fn fmi3(table: &Table, exp: &Experiment) -> String {
+    let mut o = String::new();
+    o.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    writeln!(
+        o,
+        "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"sphfmu\" instantiationToken=\"{}\" description=\"{}\" generationTool=\"sphfmu-package {}\" version=\"{}\">",
+        token(table),
+        escape(&exp.description),
+        env!("CARGO_PKG_VERSION"),
+        env!("CARGO_PKG_VERSION")
+    )
+    .unwrap();
+    writeln!(
+        o,
+        "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" canHandleVariableCommunicationStepSize=\"true\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" canReturnEarlyAfterIntermediateUpdate=\"false\" hasEventMode=\"false\" providesIntermediateUpdate=\"false\"/>"
+    )
+    .unwrap();
+    units_xml(&mut o);
+    log_categories(&mut o);
+    writeln!(
+        o,
+        "  <DefaultExperiment startTime=\"0\" stopTime=\"{}\" stepSize=\"{}\"/>",
+        num(exp.stop_time),
+        num(exp.step_size)
+    )
+    .unwrap();
+    o.push_str("  <ModelVariables>\n");
+    for v in &table.variables {
+        let tag = match v.kind {
+            Kind::Float64 => "Float64",
+            Kind::Int64 => "Int64",
+            Kind::String => "String",
+        };
+        let mut attrs = format!(
+            "name=\"{}\" valueReference=\"{}\" description=\"{}\" causality=\"{}\" variability=\"{}\"",
+            escape(&v.name),
+            v.vr,
+            escape(&v.description),
+            causality(v.causality),
+            variability(v)
+        );
+        if v.causality == Causality::Output {
+            attrs.push_str(" initial=\"calculated\"");
+        }
+        if let Some(u) = v.unit {
+            write!(attrs, " unit=\"{}\"", escape(u)).unwrap();
+        }
+        let mut children = String::new();
+        match &v.start {
+            Start::None => {}
+            Start::Float(x) => {
+                let s: Vec<String> = x.iter().map(|x| num(*x)).collect();
+                write!(attrs, " start=\"{}\"", s.join(" ")).unwrap();
+            }
+            Start::Int(i) => write!(attrs, " start=\"{i}\"").unwrap(),
+            Start::Text(t) => write!(children, "<Start value=\"{}\"/>", escape(t)).unwrap(),
+        }
+        if v.size > 1 {
+            write!(children, "<Dimension start=\"{}\"/>", v.size).unwrap();
+        }
+        if children.is_empty() {
+            writeln!(o, "    <{tag} {attrs}/>").unwrap();
+        } else {
+            writeln!(o, "    <{tag} {attrs}>{children}</{tag}>").unwrap();
+        }
+    }
+    o.push_str("  </ModelVariables>\n  <ModelStructure>\n");
+    for v in table
+        .variables
+        .iter()
+        .filter(|v| v.causality == Causality::Output)
+    {
+        writeln!(o, "    <Output valueReference=\"{}\"/>", v.vr).unwrap();
+    }
+    for v in table
+        .variables
+        .iter()
+        .filter(|v| v.causality == Causality::Output)
+    {
+        writeln!(o, "    <InitialUnknown valueReference=\"{}\"/>", v.vr).unwrap();
+    }
+    o.push_str("  </ModelStructure>\n</fmiModelDescription>\n");
+    o
+}
+
+pub fn fmi2(table: &Table, exp: &Experiment) -> String {
+    let mut o = String::new();
+    o.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    writeln!(
+        o,
+        "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"sphfmu\" guid=\"{}\" description=\"{}\" generationTool=\"sphfmu-package {}\" version=\"{}\" variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">",
+        token(table),
+        escape(&exp.description),
+        env!("CARGO_PKG_VERSION"),
+        env!("CARGO_PKG_VERSION")
+    )
+    .unwrap();
+    writeln!(
+        o,
+        "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" canHandleVariableCommunicationStepSize=\"true\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" canNotUseMemoryManagementFunctions=\"true\"/>"
+    )
+    .unwrap();
+    units_xml(&mut o);
+    log_categories(&mut o);
+    writeln!(
+        o,
+        "  <DefaultExperiment startTime=\"0\" stopTime=\"{}\" stepSize=\"{}\"/>",
+        num(exp.stop_time),
+        num(exp.step_size)
+    )
+    .unwrap();
+    o.push_str("  <ModelVariables>\n");
+    let mut outputs = vec![];
+    for (r, s) in table.fmi2.iter().enumerate() {
+        let v = &table.variables[s.variable];
+        if v.causality == Causality::Independent {
+            // FMI 2.0 has no independent variable: time is the master's
+            continue;
+        }
+        let index = r; // 1-based index below (time, r = 0, is skipped)
+        let mut attrs = format!(
+            "name=\"{}\" valueReference=\"{r}\" description=\"{}\" causality=\"{}\" variability=\"{}\"",
+            escape(&table.fmi2_name(s)),
+            escape(&v.description),
+            causality(v.causality),
+            variability(v)
+        );
+        match v.causality {
+            Causality::Output => {
+                attrs.push_str(" initial=\"calculated\"");
+                outputs.push(index);
+            }
+            Causality::Parameter => attrs.push_str(" initial=\"exact\""),
+            _ => {}
+        }
+        let (tag, mut t) = match v.kind {
+            Kind::Float64 => ("Real", String::new()),
+            Kind::Int64 => ("Integer", String::new()),
+            Kind::String => ("String", String::new()),
+        };
+        match &v.start {
+            Start::None => {}
+            Start::Float(x) => write!(t, " start=\"{}\"", num(x[s.element])).unwrap(),
+            Start::Int(i) => write!(t, " start=\"{i}\"").unwrap(),
+            Start::Text(x) => write!(t, " start=\"{}\"", escape(x)).unwrap(),
+        }
+        if let Some(u) = v.unit {
+            write!(t, " unit=\"{}\"", escape(u)).unwrap();
+        }
+        writeln!(
+            o,
+            "    <ScalarVariable {attrs}><{tag}{t}/></ScalarVariable>"
+        )
+        .unwrap();
+    }
+    o.push_str("  </ModelVariables>\n  <ModelStructure>\n    <Outputs>\n");
+    for i in &outputs {
+        writeln!(o, "      <Unknown index=\"{i}\"/>").unwrap();
+    }
+    o.push_str("    </Outputs>\n    <InitialUnknowns>\n");
+    for i in &outputs {
+        writeln!(o, "      <Unknown index=\"{i}\"/>").unwrap();
+    }
+    o.push_str("    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n");
+    o
+}
