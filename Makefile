@@ -6,23 +6,34 @@ VENV := target/venv
 VPY := $(VENV)/bin/python
 BIN := target/release/sphfmu
 
-.PHONY: all build demo test test-rust test-python venv bench bench-peer verify clean
+.PHONY: all build fmu demo test test-rust test-python venv bench bench-peer verify clean
 
 all: build
 
 build:
 	$(CARGO) build --release
 
-# Main job (until the FMU lands): run the Sod shock tube and plot it against the exact
-# Riemann solution -> target/demo/profile.png
-demo: build
-	$(BIN) run models/sod.toml --out target/demo
+# The FMUs: target/fmu/sphfmu.fmu (FMI 3.0) and sphfmu-fmi2.fmu (FMI 2.0) for FMU_CASE, and
+# the same pair for the hydrostatic tank under target/fmu/closed-tank2d/ (the tests use both).
+FMU_CASE ?= models/free-piston2d.toml
+FMU_LIB := target/release/libsphfmu_fmu.so
+PACKAGE := target/release/sphfmu-package
+fmu:
+	$(CARGO) build --release -p sphfmu-fmu
+	$(PACKAGE) --case $(FMU_CASE) --lib $(FMU_LIB) --models models --out target/fmu
+	$(PACKAGE) --case models/closed-tank2d.toml --lib $(FMU_LIB) --models models --out target/fmu/closed-tank2d
 
-# Every test: Rust unit/integration tests, then the Python tests in a venv made here.
+# Main job: build the FMU and co-simulate a free piston on a gas spring with a Python master
+# (fmpy) -> target/demo/free_piston.png, and the period against the gas-spring theory.
+demo: fmu venv
+	$(VPY) tools/free_piston.py --fmu target/fmu/sphfmu.fmu --out target/demo
+
+# Every test: Rust unit/integration tests (library and FMU crate), the FMU packages, then the
+# Python tests (fmpy as the master) in a venv made here.
 test: test-rust test-python
 
 test-rust:
-	$(CARGO) test --release
+	$(CARGO) test --release --workspace
 
 $(VENV)/.installed: tests/fmpy/requirements.txt
 	$(PYTHON) -m venv $(VENV)
@@ -32,7 +43,7 @@ $(VENV)/.installed: tests/fmpy/requirements.txt
 
 venv: $(VENV)/.installed
 
-test-python: build venv
+test-python: build fmu venv
 	$(VPY) -m pytest tests/fmpy -q
 
 # Throughput table (particle-updates/s, pair interactions/s), 2D and 3D periodic boxes.
