@@ -238,12 +238,12 @@ impl Instance {
         let now = self.time();
         if !(h.is_finite() && h > 0.0) {
             return err(format!(
-                "doStep: communicationStepSize must be finite and > 0, got {h}"
+                "communicationStepSize must be finite and > 0, got {h}"
             ));
         }
         if !current.is_finite() || (current - now).abs() > 1e-9 * now.abs().max(1.0) {
             return err(format!(
-                "doStep: currentCommunicationPoint {current} is not the FMU's time {now}"
+                "currentCommunicationPoint {current} is not the FMU's time {now}"
             ));
         }
         self.apply_inputs()?;
@@ -264,7 +264,7 @@ impl Instance {
             Err(e) => {
                 self.mode = Mode::Failed;
                 err(format!(
-                    "doStep: the solver failed ({e}); restore a saved FMU state or reset"
+                    "the solver failed ({e}); restore a saved FMU state or reset"
                 ))
             }
         }

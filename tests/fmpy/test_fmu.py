@@ -1,0 +1,117 @@
+"""The FMU driven by fmpy as a master would (issue 7). Every session that loads the FMU runs in
+its own process (fmu_sessions.py), so a crash fails one test and pytest survives."""
+import json
+import pathlib
+import subprocess
+import sys
+
+import pytest
+from fmpy import read_model_description
+from fmpy.validation import validate_fmu
+
+HERE = pathlib.Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+FMU3 = ROOT / "target" / "fmu" / "sphfmu.fmu"
+FMU2 = ROOT / "target" / "fmu" / "sphfmu-fmi2.fmu"
+TANK3 = ROOT / "target" / "fmu" / "closed-tank2d" / "sphfmu.fmu"
+TANK2 = ROOT / "target" / "fmu" / "closed-tank2d" / "sphfmu-fmi2.fmu"
+
+
+@pytest.fixture(scope="module", autouse=True)
+def packaged():
+    if not FMU3.exists() or not TANK3.exists():
+        subprocess.run(["make", "fmu"], cwd=ROOT, check=True)
+
+
+def session(name, **args):
+    """Run one FMU session in a fresh interpreter; its JSON result."""
+    p = subprocess.run([sys.executable, str(HERE / "fmu_sessions.py"), name, json.dumps(args)],
+                       capture_output=True, text=True, cwd=HERE, timeout=600)
+    assert p.returncode == 0, f"session {name} died (exit {p.returncode}):\n{p.stdout[-2000:]}\n{p.stderr[-3000:]}"
+    return json.loads(p.stdout.strip().splitlines()[-1])
+
+
+@pytest.mark.parametrize("fmu", [FMU3, FMU2, TANK3, TANK2], ids=lambda p: "/".join(p.parts[-2:]))
+def test_validation_finds_no_problem(fmu):
+    assert validate_fmu(str(fmu)) == []
+
+
+@pytest.mark.parametrize("fmu", [FMU3, FMU2], ids=["fmi3", "fmi2"])
+def test_fmpy_info_lists_every_variable(fmu):
+    p = subprocess.run([str(pathlib.Path(sys.executable).parent / "fmpy"), "info", str(fmu)],
+                       capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    md = read_model_description(str(fmu))
+    names = [v.name for v in md.modelVariables]
+    count = len(names)
+    assert f"Variables          {count}" in p.stdout
+    # every input and output is listed (fmpy shortens long names from the left)
+    for v in md.modelVariables:
+        if v.causality in ("input", "output"):
+            assert v.name[-14:] in p.stdout, v.name
+    expected = {"gravity", "piston.position", "piston.velocity", "piston.force", "end.torque",
+                "probe.middle.pressure", "marker.face.pressure", "diag.steps", "diag.energy"}
+    flat = {n.split("[")[0] for n in names}
+    assert expected <= flat
+    units = {v.name.split("[")[0]: v.unit for v in md.modelVariables}
+    assert units["piston.force"] == "N/m" and units["gravity"] == "m/s2"
+
+
+def test_tank_force_follows_a_gravity_signal():
+    r = session("tank_gravity", fmu_path=str(TANK3))
+    print(r)
+    # measured: 1.0011 of the weight at 9.81, 1.0018 after doubling g at t = 0.6 (mean over
+    # t in (1.0, 1.4]); the issue asks 1 %
+    assert abs(r["ratio1"] - 1) < 0.01 and abs(r["ratio2"] - 1) < 0.01
+    assert r["finite"] and r["mass_drift"] < 1e-12 and r["particles"] == 1566
+
+
+def test_varying_steps_reach_the_state_of_fixed_steps():
+    r = session("step_sizes", fmu_path=str(FMU3))
+    fixed, varying = r["fixed"], r["varying"]
+    assert abs(fixed[-1] - 1.0) < 1e-12 and abs(varying[-1] - 1.0) < 1e-12
+    # force x, probe pressure, marker pressure, energy: measured relative differences 1.2e-6,
+    # 8.8e-6, 5e-8, 4.5e-8 (the internal steps differ where communication points cut them)
+    for k, tol in [(0, 1e-4), (3, 1e-4), (4, 1e-4), (5, 1e-6)]:
+        assert abs(varying[k] / fixed[k] - 1) < tol, (k, fixed[k], varying[k])
+
+
+@pytest.mark.parametrize("fmi", [3, 2])
+def test_rollback_and_serialized_state_are_bit_exact(fmi):
+    r = session("rollback", fmu_path=str(FMU3 if fmi == 3 else FMU2), fmi=fmi)
+    assert r["first"] == r["again"], "get/set FMU state"
+    assert r["first"] == r["restored"], "serialize, free, deserialize into a new instance"
+    assert r["bytes"] > 1000
+
+
+def test_instances_side_by_side_are_independent():
+    r = session("two_instances", fmu_path=str(FMU3))
+    assert r["alone"] == r["beside"]
+    assert r["other"] != r["alone"]
+
+
+def test_free_piston_master_finds_the_gas_spring_frequency():
+    r = session("free_piston", fmu_path=str(FMU3))
+    ratio = r["period"] / r["theory"]
+    print(f"period {r['period']:.4f} s, theory {r['theory']:.4f} s, ratio {ratio:.4f}")
+    # measured: 1.0131 (the gas's own mass, 0.2 against M = 2, accounts for +1.6 %); issue: 3 %
+    assert abs(ratio - 1) < 0.03
+
+
+def test_bad_calls_return_errors_with_a_log_line_and_the_process_survives():
+    r = session("bad_calls", fmu_path=str(FMU3))
+    for k in ["step_before_init", "threads_out_of_range", "resolution_out_of_range", "nan_gravity",
+              "gravity_z_in_2d", "inf_position", "set_output", "param_in_step_mode",
+              "negative_step", "wrong_time", "wrong_nvalues", "unknown_vr",
+              "step_after_terminate", "unknown_case", "other_interface", "unknown_scheme"]:
+        assert r[k] == 3, (k, r[k])
+    assert r["alive"]
+    assert r["gravity_kept"] == [0.0, 0.0, 0.0], "a rejected input must not change the input"
+    assert abs(r["after_errors"] - 0.2) < 0.01
+    log = "\n".join(r["log"])
+    for needle in ["doStep: not allowed in state Instantiated", "gravity: must be finite, got NaN",
+                   "gravity[3]: must be 0 in a 2D case", "communicationStepSize must be finite and > 0",
+                   "currentCommunicationPoint 5 is not the FMU's time 0",
+                   "no-such-case.toml: cannot read", "unknown preset \"sph2000\"",
+                   "not allowed in state Terminated", "threads: must be in [0, 1024]"]:
+        assert needle in log, needle
