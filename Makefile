@@ -6,7 +6,7 @@ VENV := target/venv
 VPY := $(VENV)/bin/python
 BIN := target/release/sphfmu
 
-.PHONY: all build fmu demo test test-rust test-python venv bench bench-peer verify clean
+.PHONY: all build fmu demo test test-rust test-python test-import libclang venv bench bench-peer verify clean
 
 all: build
 
@@ -30,7 +30,7 @@ demo: fmu venv
 
 # Every test: Rust unit/integration tests (library and FMU crate), the FMU packages, then the
 # Python tests (fmpy as the master) in a venv made here.
-test: test-rust test-python
+test: test-rust test-python test-import
 
 test-rust:
 	$(CARGO) test --release --workspace
@@ -45,6 +45,22 @@ venv: $(VENV)/.installed
 
 test-python: build fmu venv
 	$(VPY) -m pytest tests/fmpy -q
+
+# A second master besides fmpy: rust-fmi's importer steps both packaged FMUs
+# (fmu/import-test, its own workspace: fmi-sys runs bindgen, which needs libclang).
+test-import: fmu libclang
+	cd fmu/import-test && CARGO_TARGET_DIR=$(CURDIR)/target/import-test $(CARGO) test --release
+
+# libclang for bindgen: Debian's libclang-dev, installed when missing (apt-get as root, else sudo).
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+libclang:
+	@if ldconfig -p 2>/dev/null | grep -q 'libclang\(-[0-9.]*\)\?\.so' || ls /usr/lib/llvm-*/lib/libclang*.so* >/dev/null 2>&1; then \
+	  echo "libclang: present"; \
+	else \
+	  echo "libclang: installing Debian's libclang-dev (rust-fmi's fmi-sys runs bindgen at build time)"; \
+	  $(SUDO) apt-get install -y -q libclang-dev || { $(SUDO) apt-get update -q && $(SUDO) apt-get install -y -q libclang-dev; } \
+	  || { echo "libclang: could not install libclang-dev; install it (apt-get install libclang-dev) and rerun"; exit 1; }; \
+	fi
 
 # Throughput table (particle-updates/s, pair interactions/s), 2D and 3D periodic boxes.
 bench: build
