@@ -24,6 +24,21 @@ def log_message(env, status, category, message):
     LOG.append((status, category.decode() if category else "", message.decode() if message else ""))
 
 
+def _log2(env, instance, status, category, message):
+    LOG.append((status, category.decode() if category else "", message.decode() if message else ""))
+
+
+def fmi2_callbacks():
+    """fmpy's default callbacks with our logger (kept alive at module level)."""
+    from fmpy.fmi2 import defaultCallbacks, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+    global _CB2
+    _CB2 = fmi2CallbackFunctions()
+    _CB2.logger = fmi2CallbackLoggerTYPE(_log2)
+    _CB2.allocateMemory = defaultCallbacks.allocateMemory
+    _CB2.freeMemory = defaultCallbacks.freeMemory
+    return _CB2
+
+
 def open_fmu(path, name="t", fmi=3, threads=2, init=True, log=True):
     md = read_model_description(path)
     d = extract(path)
@@ -37,7 +52,7 @@ def open_fmu(path, name="t", fmi=3, threads=2, init=True, log=True):
             fmu.exitInitializationMode()
     else:
         fmu = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier="sphfmu", instanceName=name)
-        fmu.instantiate(loggingOn=log)
+        fmu.instantiate(loggingOn=log, callbacks=fmi2_callbacks() if log else None)
         if init:
             fmu.setupExperiment(startTime=0.0)
             fmu.enterInitializationMode()
@@ -239,6 +254,50 @@ def session_bad_calls(fmu_path):
     fmu.freeInstance()
     out["log"] = [m for (s, c, m) in LOG if s >= 3]
     out["alive"] = True
+    return out
+
+
+def session_blowup_and_reset(fmu_path, fmi):
+    """A solver blow-up is an error with its cause logged; restoring a saved state makes the
+    instance usable again; reset starts over and reproduces a fresh run."""
+    fmu, vr = open_fmu(fmu_path, fmi=fmi)
+    if fmi == 3:
+        get_state, set_state = fmu.getFMUState, fmu.setFMUState
+        set_v = lambda v: fmu.setFloat64([vr["piston.velocity"]], [v, 0.0, 0.0])  # noqa: E731
+        force = lambda f: f.getFloat64([vr["piston.force"]], nValues=3)[0]  # noqa: E731
+    else:
+        get_state, set_state = fmu.getFMUstate, fmu.setFMUstate
+        set_v = lambda v: fmu.setReal([vr["piston.velocity[1]"]], [v])  # noqa: E731
+        force = lambda f: f.getReal([vr["piston.force[1]"]])[0]  # noqa: E731
+    fmu.doStep(0.0, 0.1)
+    saved = get_state()
+    # the piston rams through the gas at 200 m/s (far beyond what the solver can resolve)
+    set_v(-200.0)
+    out = {"blowup": expect_error(lambda: fmu.doStep(0.1, 0.5))}
+    out["step_after_failure"] = expect_error(lambda: fmu.doStep(0.1, 0.1))
+    set_state(saved)
+    set_v(0.0)
+    fmu.doStep(0.1, 0.1)
+    out["after_restore"] = force(fmu)
+    fmu.reset()
+    if fmi == 3:
+        fmu.enterInitializationMode(startTime=0.0)
+        fmu.setInt64([vr["threads"]], [2])
+    else:
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        fmu.setInteger([vr["threads"]], [2])
+    fmu.exitInitializationMode()
+    fmu.doStep(0.0, 0.1)
+    out["after_reset"] = force(fmu)
+    fmu.terminate()
+    fmu.freeInstance()
+    fresh, _ = open_fmu(fmu_path, fmi=fmi)
+    fresh.doStep(0.0, 0.1)
+    out["fresh"] = force(fresh)
+    fresh.terminate()
+    fresh.freeInstance()
+    out["log"] = [m for (s, c, m) in LOG if s >= 3]
     return out
 
 

@@ -115,3 +115,12 @@ def test_bad_calls_return_errors_with_a_log_line_and_the_process_survives():
                    "no-such-case.toml: cannot read", "unknown preset \"sph2000\"",
                    "not allowed in state Terminated", "threads: must be in [0, 1024]"]:
         assert needle in log, needle
+
+
+@pytest.mark.parametrize("fmi", [3, 2])
+def test_a_blowup_is_an_error_and_restore_or_reset_recovers(fmi):
+    r = session("blowup_and_reset", fmu_path=str(FMU3 if fmi == 3 else FMU2), fmi=fmi)
+    assert r["blowup"] == 3 and r["step_after_failure"] == 3
+    assert any("the solver failed (unstable: non-finite" in m for m in r["log"]), r["log"]
+    assert abs(r["after_restore"] - 0.2) < 0.01
+    assert r["after_reset"] == r["fresh"], "reset must reproduce a fresh instance"
