@@ -17,27 +17,50 @@ fn model(name: &str) -> Case {
     .unwrap()
 }
 
-#[test]
-fn sedov_2d_conserves_energy_and_places_the_shock() {
-    // The paper's resolution: 100² on the quadrant, spike E0/4 on the particle at the origin.
-    let case = model("sedov2d-crksph.toml");
+/// The case at `resolution` times its spacing refinement (1 = the model file's).
+fn refined(name: &str, resolution: f64) -> Case {
+    let options = sphfmu::coupling::CouplingOptions {
+        resolution,
+        ..Default::default()
+    };
+    options.apply(&model(name)).unwrap()
+}
+
+/// Sedov 2D on the quadrant, spike E0/4 on the particle at the origin: energy to round-off,
+/// shock radius within `tol`.
+fn sedov_2d(resolution: f64, tol: f64) {
+    let case = refined("sedov2d-crksph.toml", resolution);
     let out = tempfile::tempdir().unwrap();
     let s = run_case(&case, out.path(), &mut |_| {}).unwrap();
     let r = s.radial.expect("sedov check");
     let de = (s.last.total_energy - s.initial.total_energy).abs() / s.initial.total_energy;
     println!(
-        "Sedov 2D 100²: {} steps, energy change {de:.3e}, shock {:.4} (exact {:.4}), L1(ρ) {:.4e}",
-        s.steps, r.shock_radius, r.shock_radius_exact, r.l1_density
+        "Sedov 2D, {} particles: {} steps, energy change {de:.3e}, shock {:.4} (exact {:.4}), L1(ρ) {:.4e}",
+        s.last.particles, s.steps, r.shock_radius, r.shock_radius_exact, r.l1_density
     );
-    // measured 4e-14 (the compatible update conserves Σ m(½v² + u) to round-off); the issue
-    // allows 1e-10
+    // measured 4e-14 at 100² (the compatible update conserves Σ m(½v² + u) to round-off); the
+    // issue allows 1e-10
     assert!(de < 1e-10, "energy drift {de:e}");
-    // measured 0.8088 against 0.8 (1.1 %, half-height of the binned front); the issue: 3 %
     assert!(
-        (r.shock_radius / r.shock_radius_exact - 1.0).abs() < 0.03,
+        (r.shock_radius / r.shock_radius_exact - 1.0).abs() < tol,
         "shock at {}",
         r.shock_radius
     );
+}
+
+#[test]
+fn sedov_2d_conserves_energy_and_places_the_shock() {
+    // 50² in the default tier (22 s with Noh below, against about 150 s for both at 100²):
+    // measured shock 0.8218 against 0.8 (2.7 %), energy 4.2e-14; the issue's 3 % is checked at
+    // its 100² in make verify
+    sedov_2d(0.5, 0.04);
+}
+
+#[test]
+#[ignore = "the paper's 100² (about a minute on 2 cores): make verify"]
+fn sedov_2d_100_conserves_energy_and_places_the_shock() {
+    // measured 0.8088 against 0.8 (1.1 %, half-height of the binned front); the issue: 3 %
+    sedov_2d(1.0, 0.03);
 }
 
 #[test]
@@ -83,23 +106,35 @@ center = [0.0, 0.0]
     assert!(dp < 1e-10 && de < 1e-10, "momentum {dp:e}, energy {de:e}");
 }
 
-#[test]
-fn noh_2d_reaches_the_post_shock_density() {
-    let case = model("noh2d-crksph.toml");
+/// Noh 2D on the quadrant: post-shock density within `tol_rho` of 16, shock at 0.2 ± `tol_r`.
+fn noh_2d(resolution: f64, tol_rho: f64, tol_r: f64) {
+    let case = refined("noh2d-crksph.toml", resolution);
     let out = tempfile::tempdir().unwrap();
     let s = run_case(&case, out.path(), &mut |_| {}).unwrap();
     let r = s.radial.expect("noh check");
     println!(
-        "Noh 2D 100²: post-shock ρ {:.3} (exact 16), shock {:.4} (exact 0.2), L1(ρ, r < 0.5) {:.4e}",
-        r.post_shock_density, r.shock_radius, r.l1_density
+        "Noh 2D, {} particles: post-shock ρ {:.3} (exact 16), shock {:.4} (exact 0.2), L1(ρ, r < 0.5) {:.4e}",
+        s.last.particles, r.post_shock_density, r.shock_radius, r.l1_density
     );
-    // measured 15.69 and 0.2025; the issue: within 10 % of 16, shock at 0.2
-    assert!((r.post_shock_density / 16.0 - 1.0).abs() < 0.10);
+    assert!((r.post_shock_density / 16.0 - 1.0).abs() < tol_rho);
     assert!(
-        (r.shock_radius - 0.2).abs() < 0.01,
+        (r.shock_radius - 0.2).abs() < tol_r,
         "shock at {}",
         r.shock_radius
     );
+}
+
+#[test]
+fn noh_2d_reaches_the_post_shock_density() {
+    // 50² in the default tier: measured post-shock ρ 15.35 (4.1 % low), shock 0.2054
+    noh_2d(0.5, 0.10, 0.01);
+}
+
+#[test]
+#[ignore = "the paper's 100² (about two minutes on 2 cores): make verify"]
+fn noh_2d_100_reaches_the_post_shock_density() {
+    // measured 15.69 and 0.2025; the issue: within 10 % of 16, shock at 0.2
+    noh_2d(1.0, 0.10, 0.01);
 }
 
 /// The Saitoh–Makino square: ρ = 4 in [1/4, 3/4]², 1 around it, P = 1, equal spacing on one
