@@ -46,6 +46,11 @@ pub struct Particles<const D: usize> {
     pub v_sig: Vec<f64>,
     /// Artificial-viscosity coefficient α (constant or switch-driven).
     pub alpha: Vec<f64>,
+    /// The velocity a wall particle shows in the laminar viscous term: 2 v_w − v̂_f for a
+    /// no-slip body (Adami, Hu & Adams 2012, eqs. 22–23: the fluid velocity extrapolated
+    /// through the wall so that it vanishes relative to the wall on the surface), else v_w.
+    /// Unused for fluid particles.
+    pub vel_wall: Vec<Vector<D>>,
     pub extra_scalars: Vec<Vec<f64>>,
     pub extra_vectors: Vec<Vec<Vector<D>>>,
 }
@@ -83,6 +88,7 @@ impl<const D: usize> Particles<D> {
         self.curl_v.push(0.0);
         self.v_sig.push(0.0);
         self.alpha.push(0.0);
+        self.vel_wall.push(Vector::zeros());
         for s in &mut self.extra_scalars {
             s.push(0.0);
         }
@@ -130,6 +136,7 @@ impl<const D: usize> Particles<D> {
         ap(&mut self.curl_v, perm);
         ap(&mut self.v_sig, perm);
         ap(&mut self.alpha, perm);
+        ap(&mut self.vel_wall, perm);
         for s in &mut self.extra_scalars {
             ap(s, perm);
         }

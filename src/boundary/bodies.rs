@@ -45,6 +45,8 @@ pub struct Body<const D: usize> {
     pub angular_impulse: [f64; 3],
     /// Pose set from outside (`Motion::External`), carried on at its velocities.
     pub held: HeldPose<D>,
+    /// No-slip wall for the laminar viscosity (else free slip).
+    pub no_slip: bool,
 }
 
 fn to3<const D: usize>(v: &Vector<D>) -> nalgebra::Vector3<f64> {
@@ -136,7 +138,7 @@ impl<const D: usize> System<D> {
         let n = self.particles.len();
         let g = self.gravity;
         let eos = self.eos;
-        let updates: Vec<Option<(f64, f64, f64, f64)>> = {
+        let updates: Vec<Option<(f64, f64, f64, f64, Vector<D>)>> = {
             let p = &self.particles;
             let k = &self.kernel;
             let dom = &self.domain;
@@ -152,7 +154,7 @@ impl<const D: usize> System<D> {
                     }
                     let (_, _, a_w) = bodies[b as usize - 1].point(&p.rest[w]);
                     let (mut sw, mut spw, mut suw) = (0.0, 0.0, 0.0);
-                    let mut srw = Vector::<D>::zeros();
+                    let (mut srw, mut svw) = (Vector::<D>::zeros(), Vector::<D>::zeros());
                     for &e in nb.of(w) {
                         let (f, code) = unpack(e);
                         if p.body[f] != 0 {
@@ -164,6 +166,7 @@ impl<const D: usize> System<D> {
                         spw += p.pressure[f] * wf;
                         suw += p.u[f] * wf;
                         srw += r * (p.rho[f] * wf);
+                        svw += p.vel[f] * wf;
                     }
                     if sw <= 0.0 {
                         return None;
@@ -171,13 +174,21 @@ impl<const D: usize> System<D> {
                     let pw = (spw + (g - a_w).dot(&srw)) / sw;
                     let uw = suw / sw;
                     let rho = eos.density_at(pw, uw).unwrap_or(p.rho[w]);
-                    Some((pw, rho, uw, crate::eos::Eos::sound_speed(&eos, rho, uw)))
+                    // Adami et al. eqs. 22–23: no slip mirrors the fluid velocity through the
+                    // wall (relative to the wall's own v_w = p.vel[w]); free slip shows v_w
+                    let vw = if bodies[b as usize - 1].no_slip {
+                        p.vel[w] * 2.0 - svw / sw
+                    } else {
+                        p.vel[w]
+                    };
+                    Some((pw, rho, uw, crate::eos::Eos::sound_speed(&eos, rho, uw), vw))
                 })
                 .collect()
         };
         let p = &mut self.particles;
         for (w, u) in updates.into_iter().enumerate() {
-            if let Some((pw, rho, uw, c)) = u {
+            if let Some((pw, rho, uw, c, vw)) = u {
+                p.vel_wall[w] = vw;
                 p.pressure[w] = pw;
                 p.rho[w] = rho;
                 p.u[w] = uw;

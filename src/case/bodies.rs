@@ -25,6 +25,10 @@ pub struct BodyConfig {
     /// Reference density of the wall particles, which sets their mass (default: the Tait ρ0,
     /// else the first region's density).
     pub density: Option<f64>,
+    /// No-slip wall for the laminar viscosity (`[scheme] viscosity`); default free slip (the
+    /// viscous term leaves the wall out).
+    #[serde(default)]
+    pub no_slip: bool,
 }
 
 impl BodyConfig {
@@ -141,6 +145,7 @@ pub(super) fn add_bodies<const D: usize>(
             impulse: Vector::zeros(),
             angular_impulse: [0.0; 3],
             held: Default::default(),
+            no_slip: b.no_slip,
         });
     }
     Ok(out)

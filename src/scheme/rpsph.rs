@@ -56,6 +56,7 @@ impl RpsphParams {
             epsilon: self.epsilon,
             cullen_dehnen: false,
             density: super::standard::DensityMode::Summation,
+            viscosity: 0.0,
         }
     }
     pub fn validate(&self) -> Result<(), String> {
