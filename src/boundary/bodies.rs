@@ -49,6 +49,10 @@ pub struct Body<const D: usize> {
     pub no_slip: bool,
 }
 
+/// What the wall condition sets on one wall particle: P, ρ, u, c, and the velocity it shows
+/// in the laminar viscous term.
+type WallState<const D: usize> = (f64, f64, f64, f64, Vector<D>);
+
 fn to3<const D: usize>(v: &Vector<D>) -> nalgebra::Vector3<f64> {
     let mut o = nalgebra::Vector3::zeros();
     for k in 0..D.min(3) {
@@ -138,7 +142,7 @@ impl<const D: usize> System<D> {
         let n = self.particles.len();
         let g = self.gravity;
         let eos = self.eos;
-        let updates: Vec<Option<(f64, f64, f64, f64, Vector<D>)>> = {
+        let updates: Vec<Option<WallState<D>>> = {
             let p = &self.particles;
             let k = &self.kernel;
             let dom = &self.domain;
