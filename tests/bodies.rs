@@ -275,3 +275,50 @@ fn sloshing_first_mode_matches_linear_theory() {
     // bound guards the measured state until the floor's effect is found.
     assert!((period / exact - 1.0).abs() < 0.05, "period {period}");
 }
+
+/// The open tank to t = 0.5 with δ-SPH density diffusion `delta`: (force/weight and floor
+/// pressure / exact, averaged over t ∈ [0.1, 0.5]; r.m.s. fluid speed at the end).
+fn open_tank_with_delta(delta: f64) -> (f64, f64, f64) {
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("models/tank2d.toml"))
+            .unwrap()
+            .replace(
+                "density = \"continuity\"",
+                &format!("density = \"continuity\"\ndelta = {delta}"),
+            );
+    let case = Case::parse(&text).unwrap();
+    let mut sim = case.build::<2>().unwrap();
+    let mass = sim.diagnostics().mass;
+    let (mut f, mut pf, mut n) = (0.0, 0.0, 0.0);
+    let mean_rho = {
+        let p = &sim.sys.particles;
+        let f: Vec<usize> = (0..p.len()).filter(|&i| p.body[i] == 0).collect();
+        f.iter().map(|&i| p.rho[i]).sum::<f64>() / f.len() as f64
+    };
+    while sim.time < 0.5 {
+        sim.step(0.5 - sim.time).unwrap();
+        if sim.time >= 0.1 {
+            f += -sim.sys.bodies[0].force[1] / (mass * 9.81);
+            pf += wall_layer_pressure(&sim, -0.01);
+            n += 1.0;
+        }
+    }
+    let p = &sim.sys.particles;
+    let fluid: Vec<usize> = (0..p.len()).filter(|&i| p.body[i] == 0).collect();
+    let v_rms =
+        (fluid.iter().map(|&i| p.vel[i].norm_squared()).sum::<f64>() / fluid.len() as f64).sqrt();
+    (f / n, pf / n / (mean_rho * 9.81 * 0.51), v_rms)
+}
+
+#[test]
+fn density_diffusion_leaves_the_hydrostatic_tank_alone_and_calms_it() {
+    let (f0, p0, v0) = open_tank_with_delta(0.0);
+    let (f1, p1, v1) = open_tank_with_delta(0.1);
+    println!(
+        "open tank to t = 0.5: δ = 0: force/weight {f0:.4}, floor P/exact {p0:.4}, v_rms {v0:.2e}; δ = 0.1: {f1:.4}, {p1:.4}, {v1:.2e}"
+    );
+    // measured: force/weight 1.0001 both, floor pressure +0.92 % and +0.89 %, v_rms 1.01e-3
+    // and 9.44e-4 (the hydrostatic correction keeps the column; the issue: 1 % and 2 %)
+    assert!((f1 - 1.0).abs() < 0.01 && (p1 - 1.0).abs() < 0.02);
+    assert!(v1 < v0, "density diffusion should calm the settling tank");
+}

@@ -57,6 +57,7 @@ impl RpsphParams {
             cullen_dehnen: false,
             density: super::standard::DensityMode::Summation,
             viscosity: 0.0,
+            delta: 0.0,
         }
     }
     pub fn validate(&self) -> Result<(), String> {

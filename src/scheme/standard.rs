@@ -44,6 +44,13 @@ pub struct StandardParams {
     /// μ = ρν, beside the artificial viscosity; 0 = off, [0, 1e3]. Walls take part with the
     /// velocity of `Particles::vel_wall` (no-slip bodies) or not at all (free slip).
     pub viscosity: f64,
+    /// δ of the density-diffusion term (δ-SPH, Molteni & Colagrossi 2009, eq. 9) added to the
+    /// continuity equation: dρ_a/dt += δ h̄ c̄ Σ_b V_b ψ_ab·∇_a W_ab, ψ_ab = 2 (ρ_ba − ρ^H_ba)
+    /// x_ba/r², with the hydrostatic part ρ^H_ba = ρ_a g·x_ba / c_a² taken out (the
+    /// correction of Fourtakas et al. 2019, linearised in g·x/c², so a liquid at rest under
+    /// gravity is left alone). Fluid–fluid pairs only. 0 = off (default), [0, 1]; only with
+    /// `density = "continuity"`.
+    pub delta: f64,
 }
 
 /// How standard SPH gets ρ.
@@ -66,6 +73,7 @@ impl Default for StandardParams {
             cullen_dehnen: false,
             density: DensityMode::Summation,
             viscosity: 0.0,
+            delta: 0.0,
         }
     }
 }
@@ -93,6 +101,13 @@ impl StandardParams {
         check_range("scheme.beta", self.beta, 0.0, 20.0)?;
         check_range("scheme.conductivity", self.conductivity, 0.0, 5.0)?;
         check_range("scheme.viscosity", self.viscosity, 0.0, 1e3)?;
+        check_range("scheme.delta", self.delta, 0.0, 1.0)?;
+        if self.delta > 0.0 && self.density != DensityMode::Continuity {
+            return Err(format!(
+                "scheme.delta: density diffusion needs density = \"continuity\", got delta = {} with summation density",
+                self.delta
+            ));
+        }
         check_above("scheme.epsilon", self.epsilon, 0.0, 1.0)
     }
 }
@@ -342,6 +357,7 @@ pub(crate) fn force_pass<const D: usize>(
             .collect(),
     };
     // Everything the pair term reads of a particle, packed (see System::gather_with).
+    let gravity = sys.gravity;
     let recs: Vec<ForceRecord<D>> = {
         let bal = &p.extra_scalars[balsara_slot];
         let bodies = &sys.bodies;
@@ -441,6 +457,20 @@ pub(crate) fn force_pass<const D: usize>(
                 o.acc -= (mb * force) * rhat;
                 o.dudt += dudt;
                 o.drho += mb * w * fa;
+                if prm.delta > 0.0 && !ra.wall && !rb.wall {
+                    // ψ_ab·∇_a W_ab = 2 (ρ_b − ρ_a − ρ^H_ba)(−dW/dr)/r, x_ba = −dx
+                    let rho_h = ra.rho * gravity.dot(&(-pr.dx)) / (ra.c * ra.c);
+                    let hbar = 0.5 * (ra.h + rb.h);
+                    let cbar = 0.5 * (ra.c + rb.c);
+                    o.drho += prm.delta
+                        * hbar
+                        * cbar
+                        * (mb / rb.rho)
+                        * 2.0
+                        * (rb.rho - ra.rho - rho_h)
+                        * (-fa)
+                        * rinv;
+                }
             },
         );
     }
