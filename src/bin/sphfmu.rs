@@ -216,12 +216,16 @@ fn main() -> ExitCode {
                         println!("IA gradient fell back to the kernel gradient {} times (near-singular τ)", s.ia_fallbacks);
                     }
                     let (e0, e1) = (s.initial.total_energy, s.last.total_energy);
-                    println!(
-                        "total energy {:.12e} -> {:.12e} (relative change {:.3e})",
-                        e0,
-                        e1,
-                        (e1 - e0) / e0.abs().max(1e-300)
-                    );
+                    // kinetic + internal (no potential energy of gravity): a liquid at rest
+                    // starts at 0, where a relative change means nothing
+                    if e0 != 0.0 {
+                        println!(
+                            "total energy {e0:.12e} -> {e1:.12e} (relative change {:.3e})",
+                            (e1 - e0) / e0.abs()
+                        );
+                    } else {
+                        println!("total energy (kinetic + internal) {e0:.12e} -> {e1:.12e}");
+                    }
                     if let Some(e) = s.shock_tube {
                         println!(
                             "L1 against the exact Riemann solution: rho {:.4e}, v {:.4e}, P {:.4e} ({} particles)",

@@ -4,11 +4,14 @@
 use plotters::prelude::*;
 use std::path::Path;
 
-/// One panel: particle values as dots, the reference as a line.
+/// One panel: particle values as dots, a curve (the exact solution, or a time series) as a
+/// line labelled `line_label`, against `x_desc`.
 pub struct Panel<'a> {
     pub title: &'a str,
     pub particles: &'a [(f64, f64)],
     pub exact: &'a [(f64, f64)],
+    pub x_desc: &'a str,
+    pub line_label: &'a str,
 }
 
 fn register_font() {
@@ -58,26 +61,28 @@ pub fn profile_png(path: &Path, caption: &str, panels: &[Panel<'_>]) -> Result<(
             .map_err(|e| e.to_string())?;
         chart
             .configure_mesh()
-            .x_desc("x")
+            .x_desc(panel.x_desc)
             .draw()
             .map_err(|e| e.to_string())?;
-        chart
-            .draw_series(
-                panel
-                    .particles
-                    .iter()
-                    .map(|&(x, y)| Circle::new((x, y), 2, BLUE.filled())),
-            )
-            .map_err(|e| e.to_string())?
-            .label("sphfmu")
-            .legend(|(x, y)| Circle::new((x, y), 3, BLUE.filled()));
+        if !panel.particles.is_empty() {
+            chart
+                .draw_series(
+                    panel
+                        .particles
+                        .iter()
+                        .map(|&(x, y)| Circle::new((x, y), 2, BLUE.filled())),
+                )
+                .map_err(|e| e.to_string())?
+                .label("sphfmu")
+                .legend(|(x, y)| Circle::new((x, y), 3, BLUE.filled()));
+        }
         chart
             .draw_series(LineSeries::new(
                 panel.exact.iter().copied(),
                 RED.stroke_width(2),
             ))
             .map_err(|e| e.to_string())?
-            .label("exact")
+            .label(panel.line_label)
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED.stroke_width(2)));
         chart
             .configure_series_labels()

@@ -181,21 +181,29 @@ fn write_profile<const D: usize>(
             title: titles[0],
             particles: &pr,
             exact: exact[0],
+            x_desc: "x",
+            line_label: "exact",
         },
         Panel {
             title: titles[1],
             particles: &pv,
             exact: exact[1],
+            x_desc: "x",
+            line_label: "exact",
         },
         Panel {
             title: "pressure",
             particles: &pp,
             exact: exact[2],
+            x_desc: "x",
+            line_label: "exact",
         },
         Panel {
             title: "specific internal energy",
             particles: &pu,
             exact: exact[3],
+            x_desc: "x",
+            line_label: "exact",
         },
     ];
     let png = out.join("profile.png");

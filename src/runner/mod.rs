@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 mod checks;
+mod loads;
 
 /// Why a run failed, and the exit code the CLI uses for it.
 #[derive(Debug)]
@@ -199,6 +200,8 @@ fn run_dim<const D: usize>(
     };
     let initial = sim.diagnostics();
     diag.record(&initial).map_err(|e| io_err(&diag_path, e))?;
+    let mut loads = loads::LoadHistory::default();
+    loads.record(&sim);
     snaps.write(&sim)?;
     let t_end = case.time.t_end;
     let every = case.output.snapshot_every;
@@ -227,6 +230,7 @@ fn run_dim<const D: usize>(
                     if let Err(e) = diag.record(&s.diagnostics()) {
                         diag_err.get_or_insert(io_err(&diag_path, e));
                     }
+                    loads.record(s);
                 }
                 progress(&Progress {
                     time: s.time,
@@ -253,7 +257,11 @@ fn run_dim<const D: usize>(
     })();
     let last = sim.diagnostics();
     let _ = diag.record(&last);
+    loads.record(&sim);
+    // the history so far is worth keeping even when the run failed
+    let written = loads.write(out);
     result?;
+    written.map_err(RunError::Io)?;
     let wall = start.elapsed().as_secs_f64();
     let mut summary = RunSummary {
         case: case.case.name.clone(),

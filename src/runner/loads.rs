@@ -1,0 +1,87 @@
+//! The force history of every body over a run: `bodies.csv` (t, then F_x, F_y[, F_z] per
+//! body) and `loads.png` (one panel per body and component), written next to
+//! diagnostics.csv when the case has bodies.
+
+use crate::io::plot::{profile_png, Panel};
+use crate::sim::Simulation;
+use std::io::Write;
+use std::path::Path;
+
+#[derive(Default)]
+pub struct LoadHistory {
+    names: Vec<String>,
+    dim: usize,
+    rows: Vec<(f64, Vec<f64>)>,
+}
+
+impl LoadHistory {
+    pub fn record<const D: usize>(&mut self, sim: &Simulation<D>) {
+        if sim.sys.bodies.is_empty() {
+            return;
+        }
+        if self.names.is_empty() {
+            self.names = sim.sys.bodies.iter().map(|b| b.name.clone()).collect();
+            self.dim = D;
+        }
+        let f = sim
+            .sys
+            .bodies
+            .iter()
+            .flat_map(|b| b.force.iter().copied().collect::<Vec<_>>())
+            .collect();
+        self.rows.push((sim.time, f));
+    }
+
+    /// Write bodies.csv and loads.png into `dir` (nothing without bodies).
+    pub fn write(&self, dir: &Path) -> Result<(), String> {
+        if self.names.is_empty() {
+            return Ok(());
+        }
+        let axes = ["x", "y", "z"];
+        let csv = dir.join("bodies.csv");
+        let mut w = std::io::BufWriter::new(
+            std::fs::File::create(&csv).map_err(|e| format!("{}: {e}", csv.display()))?,
+        );
+        let mut header = vec!["t".to_string()];
+        for n in &self.names {
+            for a in &axes[..self.dim] {
+                header.push(format!("{n}.F{a}"));
+            }
+        }
+        let mut text = header.join(",") + "\n";
+        for (t, f) in &self.rows {
+            text.push_str(&format!("{t:.9e}"));
+            for x in f {
+                text.push_str(&format!(",{x:.9e}"));
+            }
+            text.push('\n');
+        }
+        w.write_all(text.as_bytes())
+            .map_err(|e| format!("{}: {e}", csv.display()))?;
+        let series: Vec<(String, Vec<(f64, f64)>)> = self
+            .names
+            .iter()
+            .enumerate()
+            .flat_map(|(b, n)| (0..self.dim).map(move |k| (b, k, n)))
+            .map(|(b, k, n)| {
+                let pts = self
+                    .rows
+                    .iter()
+                    .map(|(t, f)| (*t, f[b * self.dim + k]))
+                    .collect();
+                (format!("force on {n}, {} component vs t", axes[k]), pts)
+            })
+            .collect();
+        let panels: Vec<Panel<'_>> = series
+            .iter()
+            .map(|(title, pts)| Panel {
+                title,
+                particles: &[],
+                exact: pts,
+                x_desc: "t (s)",
+                line_label: "sphfmu",
+            })
+            .collect();
+        profile_png(&dir.join("loads.png"), "Body loads (from the run)", &panels)
+    }
+}
