@@ -1,6 +1,6 @@
 //! What both C faces share: panic containment and C strings.
 
-use crate::model::Status;
+use crate::model::{CallResult, Instance, Status};
 use std::ffi::{c_char, CStr};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -70,4 +70,38 @@ pub unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
     } else {
         Some(std::slice::from_raw_parts_mut(p, n))
     }
+}
+
+/// What a C handle points to: something holding an instance.
+pub trait Handle {
+    fn instance(&mut self) -> &mut Instance;
+}
+
+/// Run `f` on the `H` behind the handle `p` (NULL: Error); a rejected call is logged in
+/// `logStatusError` / `logStatusWarning` with the C function's name and becomes its status;
+/// a panic becomes Fatal.
+///
+/// # Safety
+/// `p` is NULL or a handle made by this crate for an `H`.
+pub unsafe fn with<H: Handle>(
+    p: *mut std::ffi::c_void,
+    call: &str,
+    f: impl FnOnce(&mut H) -> CallResult<()>,
+) -> Status {
+    if p.is_null() {
+        return Status::Error;
+    }
+    let h = &mut *(p as *mut H);
+    guard(|| match f(h) {
+        Ok(()) => Status::Ok,
+        Err((status, msg)) => {
+            let cat = if status >= Status::Error {
+                "logStatusError"
+            } else {
+                "logStatusWarning"
+            };
+            h.instance().log(status, cat, &format!("{call}: {msg}"));
+            status
+        }
+    })
 }

@@ -2,8 +2,9 @@
 //! three scalars (`name[1]`..`name[3]`); Int64 variables as Integer (saturated to i32).
 #![allow(non_snake_case, clippy::missing_safety_doc, clippy::too_many_arguments)]
 
-use crate::ffi::{guard, slice, slice_mut, text, uri_to_path};
-use crate::model::{CallResult, Instance, Snapshot, Status};
+use crate::ffi::{slice, slice_mut, text, uri_to_path};
+use crate::model::{CallResult, Instance, Status};
+use crate::state_ffi;
 use crate::table::Kind;
 use std::ffi::{c_char, c_int, c_void, CString};
 use std::path::Path;
@@ -29,22 +30,13 @@ pub struct Fmu2 {
 }
 
 unsafe fn with(p: Comp, call: &str, f: impl FnOnce(&mut Fmu2) -> CallResult<()>) -> c_int {
-    if p.is_null() {
-        return Status::Error as c_int;
+    crate::ffi::with::<Fmu2>(p, call, f) as c_int
+}
+
+impl crate::ffi::Handle for Fmu2 {
+    fn instance(&mut self) -> &mut Instance {
+        &mut self.inst
     }
-    let fmu = &mut *(p as *mut Fmu2);
-    guard(|| match f(fmu) {
-        Ok(()) => Status::Ok,
-        Err((status, msg)) => {
-            let cat = if status >= Status::Error {
-                "logStatusError"
-            } else {
-                "logStatusWarning"
-            };
-            fmu.inst.log(status, cat, &format!("{call}: {msg}"));
-            status
-        }
-    }) as c_int
 }
 
 fn bad(msg: impl Into<String>) -> CallResult<()> {
@@ -529,100 +521,15 @@ pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
     })
 }
 
-// ---- FMU state -----------------------------------------------------------------------------
+// ---- FMU state (shared logic in state_ffi) ---------------------------------------------------
 
-#[no_mangle]
-pub unsafe extern "C" fn fmi2GetFMUstate(p: Comp, state: *mut *mut c_void) -> c_int {
-    with(p, "fmi2GetFMUstate", |f| {
-        if state.is_null() {
-            return bad("FMUstate pointer is NULL");
-        }
-        let snap = f.inst.get_state()?;
-        if !(*state).is_null() {
-            *((*state) as *mut Snapshot) = snap;
-        } else {
-            *state = Box::into_raw(Box::new(snap)) as *mut c_void;
-        }
-        Ok(())
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SetFMUstate(p: Comp, state: *mut c_void) -> c_int {
-    with(p, "fmi2SetFMUstate", |f| {
-        if state.is_null() {
-            return bad("FMUstate is NULL");
-        }
-        f.inst.set_state(&*(state as *const Snapshot))
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2FreeFMUstate(p: Comp, state: *mut *mut c_void) -> c_int {
-    with(p, "fmi2FreeFMUstate", |_| {
-        if !state.is_null() && !(*state).is_null() {
-            drop(Box::from_raw((*state) as *mut Snapshot));
-            *state = std::ptr::null_mut();
-        }
-        Ok(())
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
-    p: Comp,
-    state: *mut c_void,
-    size: *mut usize,
-) -> c_int {
-    with(p, "fmi2SerializedFMUstateSize", |_| {
-        if state.is_null() || size.is_null() {
-            return bad("FMUstate or size is NULL");
-        }
-        *size = (*(state as *const Snapshot)).serialize().len();
-        Ok(())
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SerializeFMUstate(
-    p: Comp,
-    state: *mut c_void,
-    bytes: *mut u8,
-    size: usize,
-) -> c_int {
-    with(p, "fmi2SerializeFMUstate", |_| {
-        if state.is_null() {
-            return bad("FMUstate is NULL");
-        }
-        let data = (*(state as *const Snapshot)).serialize();
-        if data.len() != size {
-            return bad(format!(
-                "size = {size} but the state takes {} bytes",
-                data.len()
-            ));
-        }
-        slice_mut(bytes, size)
-            .ok_or((Status::Error, "serializedState is NULL".to_string()))?
-            .copy_from_slice(&data);
-        Ok(())
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
-    p: Comp,
-    bytes: *const u8,
-    size: usize,
-    state: *mut *mut c_void,
-) -> c_int {
-    with(p, "fmi2DeSerializeFMUstate", |_| {
-        let data =
-            slice(bytes, size).ok_or((Status::Error, "serializedState is NULL".to_string()))?;
-        if state.is_null() {
-            return bad("FMUstate pointer is NULL");
-        }
-        let snap = Snapshot::deserialize(data).map_err(|e| (Status::Error, e))?;
-        *state = Box::into_raw(Box::new(snap)) as *mut c_void;
-        Ok(())
-    })
-}
+state_ffi::export_state_functions!(
+    Comp,
+    c_int,
+    fmi2GetFMUstate,
+    fmi2SetFMUstate,
+    fmi2FreeFMUstate,
+    fmi2SerializedFMUstateSize,
+    fmi2SerializeFMUstate,
+    fmi2DeSerializeFMUstate
+);

@@ -4,8 +4,9 @@
 //! master) and checks its pointers.
 #![allow(non_snake_case, clippy::missing_safety_doc, clippy::too_many_arguments)]
 
-use crate::ffi::{guard, slice, slice_mut, text};
-use crate::model::{CallResult, Instance, Snapshot, Status};
+use crate::ffi::{slice, slice_mut, text};
+use crate::model::{CallResult, Instance, Status};
+use crate::state_ffi;
 use crate::table::Kind;
 use std::ffi::{c_char, c_void, CString};
 use std::path::Path;
@@ -20,30 +21,55 @@ pub struct Fmu3 {
     strings: Vec<CString>,
 }
 
-const NULL_STATUS: i32 = Status::Error as i32;
-
 /// Run `f` on the instance behind `p`; errors are logged and turned into their status.
 unsafe fn with(p: Inst, call: &str, f: impl FnOnce(&mut Fmu3) -> CallResult<()>) -> i32 {
-    if p.is_null() {
-        return NULL_STATUS;
+    crate::ffi::with::<Fmu3>(p, call, f) as i32
+}
+
+impl crate::ffi::Handle for Fmu3 {
+    fn instance(&mut self) -> &mut Instance {
+        &mut self.inst
     }
-    let fmu = &mut *(p as *mut Fmu3);
-    guard(|| match f(fmu) {
-        Ok(()) => Status::Ok,
-        Err((status, msg)) => {
-            let cat = if status >= Status::Error {
-                "logStatusError"
-            } else {
-                "logStatusWarning"
-            };
-            fmu.inst.log(status, cat, &format!("{call}: {msg}"));
-            status
-        }
-    }) as i32
 }
 
 fn bad(msg: impl Into<String>) -> CallResult<()> {
     Err((Status::Error, msg.into()))
+}
+
+/// Value references and values of a get on scalar variables (nValues must equal nvr).
+unsafe fn scalars_out<'a, T>(
+    vrs: *const Vr,
+    nvr: usize,
+    values: *mut T,
+    n_values: usize,
+) -> CallResult<(&'a [Vr], &'a mut [T])> {
+    let vrs = slice(vrs, nvr).ok_or((Status::Error, "valueReferences is NULL".to_string()))?;
+    let out = slice_mut(values, n_values).ok_or((Status::Error, "values is NULL".to_string()))?;
+    if nvr != n_values {
+        return Err((
+            Status::Error,
+            format!("nValues = {n_values} but {nvr} scalar variables"),
+        ));
+    }
+    Ok((vrs, out))
+}
+
+/// Value references and values of a set on scalar variables (nValues must equal nvr).
+unsafe fn scalars_in<'a, T>(
+    vrs: *const Vr,
+    nvr: usize,
+    values: *const T,
+    n_values: usize,
+) -> CallResult<(&'a [Vr], &'a [T])> {
+    let vrs = slice(vrs, nvr).ok_or((Status::Error, "valueReferences is NULL".to_string()))?;
+    let vals = slice(values, n_values).ok_or((Status::Error, "values is NULL".to_string()))?;
+    if nvr != n_values {
+        return Err((
+            Status::Error,
+            format!("nValues = {n_values} but {nvr} scalar variables"),
+        ));
+    }
+    Ok((vrs, vals))
 }
 
 #[no_mangle]
@@ -331,11 +357,7 @@ pub unsafe extern "C" fn fmi3GetInt64(
     n_values: usize,
 ) -> i32 {
     with(p, "fmi3GetInt64", |f| {
-        let vrs = slice(vrs, nvr).ok_or((Status::Error, "valueReferences is NULL".into()))?;
-        let out = slice_mut(values, n_values).ok_or((Status::Error, "values is NULL".into()))?;
-        if nvr != n_values {
-            return bad(format!("nValues = {n_values} but {nvr} scalar variables"));
-        }
+        let (vrs, out) = scalars_out(vrs, nvr, values, n_values)?;
         for (k, &vr) in vrs.iter().enumerate() {
             let i = f.inst.var3(vr, Kind::Int64)?;
             out[k] = f.inst.get_i64(i)?;
@@ -353,11 +375,7 @@ pub unsafe extern "C" fn fmi3SetInt64(
     n_values: usize,
 ) -> i32 {
     with(p, "fmi3SetInt64", |f| {
-        let vrs = slice(vrs, nvr).ok_or((Status::Error, "valueReferences is NULL".into()))?;
-        let vals = slice(values, n_values).ok_or((Status::Error, "values is NULL".into()))?;
-        if nvr != n_values {
-            return bad(format!("nValues = {n_values} but {nvr} scalar variables"));
-        }
+        let (vrs, vals) = scalars_in(vrs, nvr, values, n_values)?;
         f.inst.atomically(|inst| {
             for (k, &vr) in vrs.iter().enumerate() {
                 let i = inst.var3(vr, Kind::Int64)?;
@@ -377,11 +395,7 @@ pub unsafe extern "C" fn fmi3GetString(
     n_values: usize,
 ) -> i32 {
     with(p, "fmi3GetString", |f| {
-        let vrs = slice(vrs, nvr).ok_or((Status::Error, "valueReferences is NULL".into()))?;
-        let out = slice_mut(values, n_values).ok_or((Status::Error, "values is NULL".into()))?;
-        if nvr != n_values {
-            return bad(format!("nValues = {n_values} but {nvr} scalar variables"));
-        }
+        let (vrs, out) = scalars_out(vrs, nvr, values, n_values)?;
         f.strings.clear();
         for &vr in vrs {
             let i = f.inst.var3(vr, Kind::String)?;
@@ -404,11 +418,7 @@ pub unsafe extern "C" fn fmi3SetString(
     n_values: usize,
 ) -> i32 {
     with(p, "fmi3SetString", |f| {
-        let vrs = slice(vrs, nvr).ok_or((Status::Error, "valueReferences is NULL".into()))?;
-        let vals = slice(values, n_values).ok_or((Status::Error, "values is NULL".into()))?;
-        if nvr != n_values {
-            return bad(format!("nValues = {n_values} but {nvr} scalar variables"));
-        }
+        let (vrs, vals) = scalars_in(vrs, nvr, values, n_values)?;
         f.inst.atomically(|inst| {
             for (k, &vr) in vrs.iter().enumerate() {
                 let i = inst.var3(vr, Kind::String)?;
@@ -495,104 +505,18 @@ pub unsafe extern "C" fn fmi3SetClock(p: Inst, vrs: *const Vr, nvr: usize, _v: *
     with(p, "fmi3SetClock", |_| none_of_type(vrs, nvr))
 }
 
-// ---- FMU state -----------------------------------------------------------------------------
+// ---- FMU state (shared logic in state_ffi) ---------------------------------------------------
 
-#[no_mangle]
-pub unsafe extern "C" fn fmi3GetFMUState(p: Inst, state: *mut *mut c_void) -> i32 {
-    with(p, "fmi3GetFMUState", |f| {
-        if state.is_null() {
-            return bad("FMUState pointer is NULL");
-        }
-        let snap = f.inst.get_state()?;
-        if !(*state).is_null() {
-            // overwrite the master's earlier state in place
-            *((*state) as *mut Snapshot) = snap;
-        } else {
-            *state = Box::into_raw(Box::new(snap)) as *mut c_void;
-        }
-        Ok(())
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3SetFMUState(p: Inst, state: *mut c_void) -> i32 {
-    with(p, "fmi3SetFMUState", |f| {
-        if state.is_null() {
-            return bad("FMUState is NULL");
-        }
-        f.inst.set_state(&*(state as *const Snapshot))
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3FreeFMUState(p: Inst, state: *mut *mut c_void) -> i32 {
-    with(p, "fmi3FreeFMUState", |_| {
-        if !state.is_null() && !(*state).is_null() {
-            drop(Box::from_raw((*state) as *mut Snapshot));
-            *state = std::ptr::null_mut();
-        }
-        Ok(())
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
-    p: Inst,
-    state: *mut c_void,
-    size: *mut usize,
-) -> i32 {
-    with(p, "fmi3SerializedFMUStateSize", |_| {
-        if state.is_null() || size.is_null() {
-            return bad("FMUState or size is NULL");
-        }
-        *size = (*(state as *const Snapshot)).serialize().len();
-        Ok(())
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3SerializeFMUState(
-    p: Inst,
-    state: *mut c_void,
-    bytes: *mut u8,
-    size: usize,
-) -> i32 {
-    with(p, "fmi3SerializeFMUState", |_| {
-        if state.is_null() {
-            return bad("FMUState is NULL");
-        }
-        let data = (*(state as *const Snapshot)).serialize();
-        if data.len() != size {
-            return bad(format!(
-                "size = {size} but the state takes {} bytes",
-                data.len()
-            ));
-        }
-        slice_mut(bytes, size)
-            .ok_or((Status::Error, "serializedState is NULL".to_string()))?
-            .copy_from_slice(&data);
-        Ok(())
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3DeserializeFMUState(
-    p: Inst,
-    bytes: *const u8,
-    size: usize,
-    state: *mut *mut c_void,
-) -> i32 {
-    with(p, "fmi3DeserializeFMUState", |_| {
-        let data =
-            slice(bytes, size).ok_or((Status::Error, "serializedState is NULL".to_string()))?;
-        if state.is_null() {
-            return bad("FMUState pointer is NULL");
-        }
-        let snap = Snapshot::deserialize(data).map_err(|e| (Status::Error, e))?;
-        *state = Box::into_raw(Box::new(snap)) as *mut c_void;
-        Ok(())
-    })
-}
+state_ffi::export_state_functions!(
+    Inst,
+    i32,
+    fmi3GetFMUState,
+    fmi3SetFMUState,
+    fmi3FreeFMUState,
+    fmi3SerializedFMUStateSize,
+    fmi3SerializeFMUState,
+    fmi3DeserializeFMUState
+);
 
 // ---- what a co-simulation FMU without events, clocks or structural parameters lacks ------
 

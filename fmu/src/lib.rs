@@ -11,5 +11,6 @@ pub mod ffi;
 pub mod fmi2;
 pub mod fmi3;
 pub mod model;
+pub mod state_ffi;
 pub mod table;
 pub mod xml;

@@ -344,13 +344,7 @@ impl Instance {
             return err(format!("{name}: must be finite, got {x}"));
         }
         let put = |dst: &mut [f64; 3]| dst[first..first + values.len()].copy_from_slice(values);
-        let ext = |b: usize| {
-            self.table
-                .external_bodies
-                .iter()
-                .position(|&x| x == b)
-                .expect("table lists it")
-        };
+        let ext = |b: usize| self.table.external_index(b);
         match v.binding {
             Binding::Param(Param::Resolution) => {
                 let r = values[0];
@@ -430,13 +424,7 @@ impl Instance {
     pub fn get_f64(&mut self, i: usize) -> CallResult<Vec<f64>> {
         let v = &self.table.variables[i];
         let b = v.binding;
-        let ext = |b: usize| {
-            self.table
-                .external_bodies
-                .iter()
-                .position(|&x| x == b)
-                .expect("table lists it")
-        };
+        let ext = |b: usize| self.table.external_index(b);
         Ok(match b {
             Binding::Time => vec![self.time()],
             Binding::Param(Param::Resolution) => vec![self.params.resolution],

@@ -445,6 +445,14 @@ impl Table {
         }
     }
 
+    /// Position of case body `body` among the externally driven ones (those have inputs).
+    pub fn external_index(&self, body: usize) -> usize {
+        self.external_bodies
+            .iter()
+            .position(|&x| x == body)
+            .expect("inputs exist only for externally driven bodies")
+    }
+
     /// The FMI 2.0 name of a scalar.
     pub fn fmi2_name(&self, s: &Scalar2) -> String {
         let v = &self.variables[s.variable];

@@ -96,6 +96,31 @@ fn log_categories(out: &mut String) {
     out.push_str("  </LogCategories>\n");
 }
 
+/// The XML declaration and the opening root element (`token_attr`: instantiationToken in
+/// 3.0, guid in 2.0).
+fn root(table: &Table, exp: &Experiment, version: &str, token_attr: &str, extra: &str) -> String {
+    let v = env!("CARGO_PKG_VERSION");
+    format!(
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<fmiModelDescription fmiVersion=\"{version}\" modelName=\"sphfmu\" {token_attr}=\"{}\" description=\"{}\" generationTool=\"sphfmu-package {v}\" version=\"{v}\"{extra}>\n",
+        token(table),
+        escape(&exp.description)
+    )
+}
+
+/// `<UnitDefinitions>`, `<LogCategories>` and `<DefaultExperiment>`, the same in both
+/// versions (and in the same place of the element order).
+fn shared_sections(out: &mut String, exp: &Experiment) {
+    units_xml(out);
+    log_categories(out);
+    writeln!(
+        out,
+        "  <DefaultExperiment startTime=\"0\" stopTime=\"{}\" stepSize=\"{}\"/>",
+        num(exp.stop_time),
+        num(exp.step_size)
+    )
+    .unwrap();
+}
+
 fn causality(c: Causality) -> &'static str {
     match c {
         Causality::Independent => "independent",
@@ -114,31 +139,13 @@ fn variability(v: &Variable) -> &'static str {
 }
 
 pub fn fmi3(table: &Table, exp: &Experiment) -> String {
-    let mut o = String::new();
-    o.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
-    writeln!(
-        o,
-        "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"sphfmu\" instantiationToken=\"{}\" description=\"{}\" generationTool=\"sphfmu-package {}\" version=\"{}\">",
-        token(table),
-        escape(&exp.description),
-        env!("CARGO_PKG_VERSION"),
-        env!("CARGO_PKG_VERSION")
-    )
-    .unwrap();
+    let mut o = root(table, exp, "3.0", "instantiationToken", "");
     writeln!(
         o,
         "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" canHandleVariableCommunicationStepSize=\"true\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" canReturnEarlyAfterIntermediateUpdate=\"false\" hasEventMode=\"false\" providesIntermediateUpdate=\"false\"/>"
     )
     .unwrap();
-    units_xml(&mut o);
-    log_categories(&mut o);
-    writeln!(
-        o,
-        "  <DefaultExperiment startTime=\"0\" stopTime=\"{}\" stepSize=\"{}\"/>",
-        num(exp.stop_time),
-        num(exp.step_size)
-    )
-    .unwrap();
+    shared_sections(&mut o, exp);
     o.push_str("  <ModelVariables>\n");
     for v in &table.variables {
         let tag = match v.kind {
@@ -199,31 +206,19 @@ pub fn fmi3(table: &Table, exp: &Experiment) -> String {
 }
 
 pub fn fmi2(table: &Table, exp: &Experiment) -> String {
-    let mut o = String::new();
-    o.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
-    writeln!(
-        o,
-        "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"sphfmu\" guid=\"{}\" description=\"{}\" generationTool=\"sphfmu-package {}\" version=\"{}\" variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">",
-        token(table),
-        escape(&exp.description),
-        env!("CARGO_PKG_VERSION"),
-        env!("CARGO_PKG_VERSION")
-    )
-    .unwrap();
+    let mut o = root(
+        table,
+        exp,
+        "2.0",
+        "guid",
+        " variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\"",
+    );
     writeln!(
         o,
         "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" canHandleVariableCommunicationStepSize=\"true\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" canNotUseMemoryManagementFunctions=\"true\"/>"
     )
     .unwrap();
-    units_xml(&mut o);
-    log_categories(&mut o);
-    writeln!(
-        o,
-        "  <DefaultExperiment startTime=\"0\" stopTime=\"{}\" stepSize=\"{}\"/>",
-        num(exp.stop_time),
-        num(exp.step_size)
-    )
-    .unwrap();
+    shared_sections(&mut o, exp);
     o.push_str("  <ModelVariables>\n");
     let mut outputs = vec![];
     for (r, s) in table.fmi2.iter().enumerate() {
