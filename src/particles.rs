@@ -51,6 +51,9 @@ pub struct Particles<const D: usize> {
     /// through the wall so that it vanishes relative to the wall on the surface), else v_w.
     /// Unused for fluid particles.
     pub vel_wall: Vec<Vector<D>>,
+    /// Force of the fluid on a wall particle from the latest evaluation, m_w (a_w − g) before
+    /// the wall is given its rigid motion (patches sum it). Zero for fluid particles.
+    pub wall_force: Vec<Vector<D>>,
     pub extra_scalars: Vec<Vec<f64>>,
     pub extra_vectors: Vec<Vec<Vector<D>>>,
 }
@@ -89,6 +92,7 @@ impl<const D: usize> Particles<D> {
         self.v_sig.push(0.0);
         self.alpha.push(0.0);
         self.vel_wall.push(Vector::zeros());
+        self.wall_force.push(Vector::zeros());
         for s in &mut self.extra_scalars {
             s.push(0.0);
         }
@@ -137,6 +141,7 @@ impl<const D: usize> Particles<D> {
         ap(&mut self.v_sig, perm);
         ap(&mut self.alpha, perm);
         ap(&mut self.vel_wall, perm);
+        ap(&mut self.wall_force, perm);
         for s in &mut self.extra_scalars {
             ap(s, perm);
         }

@@ -45,8 +45,18 @@ fn each_bad_value_names_its_key_and_range() {
         ),
         (
             "conductivity = 1.0",
-            "conductivity = 1.0\nviscosity = 3",
-            &["unknown field", "viscosity"],
+            "conductivity = 1.0\nviscocity = 3",
+            &["unknown field", "viscocity"],
+        ),
+        (
+            "conductivity = 1.0",
+            "conductivity = 1.0\nviscosity = -3",
+            &["scheme.viscosity", "[0, 1000]"],
+        ),
+        (
+            "conductivity = 1.0",
+            "conductivity = 1.0\ndelta = 0.1",
+            &["scheme.delta", "continuity"],
         ),
         (
             "name = \"cubic-spline\"",

@@ -2,7 +2,7 @@
 //! save / restore bit for bit, and bad inputs that change nothing.
 
 use sphfmu::case::Case;
-use sphfmu::coupling::{BodyKinematics, Coupling, CouplingOptions, ProbeValue};
+use sphfmu::coupling::{BodyKinematics, Coupling, CouplingOptions, PatchValue, ProbeValue};
 use std::path::Path;
 
 fn model_text(name: &str) -> String {
@@ -211,12 +211,23 @@ point = [0.5, 0.0]
 name = "wall"
 body = "tank"
 point = [0.0, 0.25]
+[[patch]]
+name = "floor"
+body = "tank"
+min = [0.1, -0.2]
+max = [0.9, 0.0]
+[[patch]]
+name = "lid"
+body = "tank"
+min = [0.1, 0.5]
+max = [0.9, 0.7]
 "#;
     let case = Case::parse(&text).unwrap();
     let mut c = Coupling::new(&case, &options()).unwrap();
     // time averages over t ∈ [0.5, 1] as in tests/bodies.rs (the acoustic oscillation of
     // the settling tank averages out)
     let (mut p, mut m, mut n) = (ProbeValue::default(), vec![0.0; 2], 0.0);
+    let mut patches = [PatchValue::default(); 2];
     let mut t = 0.5;
     c.step_to(t).unwrap();
     while t < 1.0 + 1e-9 {
@@ -227,6 +238,12 @@ point = [0.0, 0.25]
         for (s, x) in m.iter_mut().zip(c.markers()) {
             *s += x;
         }
+        for (s, x) in patches.iter_mut().zip(c.patches()) {
+            s.mean_pressure += x.mean_pressure;
+            s.peak_pressure = s.peak_pressure.max(x.peak_pressure);
+            s.area = x.area;
+            s.force[1] += x.force[1];
+        }
         n += 1.0;
         t += 0.025;
         c.step_to(t).unwrap();
@@ -235,6 +252,10 @@ point = [0.0, 0.25]
     p.coverage /= n;
     p.velocity[1] /= n;
     m.iter_mut().for_each(|x| *x /= n);
+    for s in patches.iter_mut() {
+        s.mean_pressure /= n;
+        s.force[1] /= n;
+    }
     // Tait water from 2e4 Pa at the top: mean ρ 1030.5 kg/m³ over the column
     let exact = |y: f64| 2e4 + 1030.5 * 9.81 * (0.5 - y);
     println!(
@@ -249,6 +270,23 @@ point = [0.0, 0.25]
     assert!((p.coverage - 1.0).abs() < 0.01 && p.velocity[1].abs() < 0.01);
     assert!((m[0] / exact(0.0) - 1.0).abs() < 0.015);
     assert!((m[1] / exact(0.25) - 1.0).abs() < 0.03);
+    // patches: 40 surface particles each (0.8 m per metre of depth); the first wall layer
+    // lies Δx/2 beyond the floor and the lid
+    let [floor, lid] = patches;
+    println!("patches: floor {floor:?}, lid {lid:?}");
+    assert!((floor.area - 0.8).abs() < 1e-12 && (lid.area - 0.8).abs() < 1e-12);
+    let floor_force = -floor.force[1] / (exact(0.0) * 0.8);
+    let lid_force = lid.force[1] / (exact(0.5) * 0.8);
+    println!(
+        "floor patch: mean P / exact {:.4}, force / (P A) {floor_force:.4}; lid: mean P / exact {:.4}, force / (P A) {lid_force:.4}",
+        floor.mean_pressure / exact(-0.01),
+        lid.mean_pressure / exact(0.51)
+    );
+    // measured: floor force 0.9997 and lid force 0.9953 of P·A; the floor's wall layer reads
+    // −1.6 % (the lid's −2.1 %), as the closed-tank test's wall layers do
+    assert!((floor.mean_pressure / exact(-0.01) - 1.0).abs() < 0.02);
+    assert!((floor_force - 1.0).abs() < 0.02 && (lid_force - 1.0).abs() < 0.02);
+    assert!(floor.peak_pressure >= floor.mean_pressure);
 }
 
 #[test]

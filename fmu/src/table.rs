@@ -52,6 +52,10 @@ pub enum Binding {
     ProbeVelocity(usize),
     ProbeCoverage(usize),
     Marker(usize),
+    PatchMean(usize),
+    PatchPeak(usize),
+    PatchArea(usize),
+    PatchForce(usize),
     Steps,
     Dt,
     Particles,
@@ -112,6 +116,7 @@ pub struct Table {
 
 /// Units by dimension: a 2D case is per metre of depth.
 struct Units {
+    area: &'static str,
     force: &'static str,
     torque: &'static str,
     mass: &'static str,
@@ -122,6 +127,7 @@ struct Units {
 fn units(dimension: usize) -> Units {
     match dimension {
         1 => Units {
+            area: "1",
             force: "N/m2",
             torque: "N/m",
             mass: "kg/m2",
@@ -129,6 +135,7 @@ fn units(dimension: usize) -> Units {
             energy: "J/m2",
         },
         2 => Units {
+            area: "m",
             force: "N/m",
             torque: "N",
             mass: "kg/m",
@@ -136,6 +143,7 @@ fn units(dimension: usize) -> Units {
             energy: "J/m",
         },
         _ => Units {
+            area: "m2",
             force: "N",
             torque: "N.m",
             mass: "kg",
@@ -153,6 +161,8 @@ pub const UNITS: &[(&str, [i32; 3])] = &[
     ("m/s", [0, 1, -1]),
     ("m/s2", [0, 1, -2]),
     ("rad", [0, 0, 0]),
+    ("1", [0, 0, 0]),
+    ("m2", [0, 2, 0]),
     ("rad/s", [0, 0, -1]),
     ("Pa", [1, -1, -2]),
     ("kg/m3", [1, -3, 0]),
@@ -368,6 +378,49 @@ impl Table {
                 Binding::Marker(i),
             );
         }
+        for (i, pa) in case.patches.iter().enumerate() {
+            let n = &pa.name;
+            add(
+                format!("patch.{n}.mean_pressure"),
+                Kind::Float64,
+                Output,
+                1,
+                Start::None,
+                Some("Pa"),
+                format!("Mean wall pressure on patch {n} of body {}", pa.body),
+                Binding::PatchMean(i),
+            );
+            add(
+                format!("patch.{n}.peak_pressure"),
+                Kind::Float64,
+                Output,
+                1,
+                Start::None,
+                Some("Pa"),
+                format!("Peak wall pressure on patch {n}"),
+                Binding::PatchPeak(i),
+            );
+            add(
+                format!("patch.{n}.area"),
+                Kind::Float64,
+                Output,
+                1,
+                Start::None,
+                Some(u.area),
+                format!("Area of patch {n}"),
+                Binding::PatchArea(i),
+            );
+            add(
+                format!("patch.{n}.force"),
+                Kind::Float64,
+                Output,
+                3,
+                Start::None,
+                Some(u.force),
+                format!("Force of the fluid on patch {n}"),
+                Binding::PatchForce(i),
+            );
+        }
         add(
             "diag.steps".into(),
             Kind::Int64,
@@ -474,7 +527,11 @@ impl Table {
                     .map(|b| (b.name.clone(), b.motion == Motion::External))
                     .collect::<Vec<_>>(),
                 c.probes.iter().map(|p| p.name.clone()).collect::<Vec<_>>(),
-                c.markers.iter().map(|m| m.name.clone()).collect::<Vec<_>>(),
+                c.markers
+                    .iter()
+                    .map(|m| m.name.clone())
+                    .chain(c.patches.iter().map(|p| format!("patch {}", p.name)))
+                    .collect::<Vec<_>>(),
             )
         };
         let (a, b) = (sig(packaged), sig(other));
@@ -492,7 +549,7 @@ impl Table {
         }
         if a.2 != b.2 || a.3 != b.3 {
             return Err(format!(
-                "probes {:?} and markers {:?}; the FMU's variables are for {:?} and {:?}",
+                "probes {:?} and markers and patches {:?}; the FMU's variables are for {:?} and {:?}",
                 b.2, b.3, a.2, a.3
             ));
         }

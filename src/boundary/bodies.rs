@@ -233,6 +233,7 @@ impl<const D: usize> System<D> {
             }
             let body = &mut self.bodies[b - 1];
             let f = (p.acc[i] - g) * p.mass[i];
+            p.wall_force[i] = f;
             body.force += f;
             let arm = p.pos[i] - (body.reference + body.pose.displacement);
             let t = to3(&arm).cross(&to3(&f));

@@ -7,7 +7,7 @@ mod glass;
 mod ics;
 mod probes;
 
-pub use probes::{MarkerConfig, ProbeConfig};
+pub use probes::{MarkerConfig, PatchConfig, ProbeConfig};
 
 pub use bodies::BodyConfig;
 pub use checks::{Blast, Verify};
@@ -82,6 +82,9 @@ pub struct Case {
     /// Points on body surfaces where the wall pressure is reported.
     #[serde(default, rename = "marker")]
     pub markers: Vec<MarkerConfig>,
+    /// Named parts of body surfaces: mean and peak pressure, area, force.
+    #[serde(default, rename = "patch")]
+    pub patches: Vec<PatchConfig>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -24,6 +24,19 @@ pub struct MarkerConfig {
     pub point: Vec<f64>,
 }
 
+/// A named part of a body's surface: the body's wall particles whose t = 0 position lies in
+/// the box (all layers, for the force) and, of those, the first layer (for the pressures and
+/// the area).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PatchConfig {
+    pub name: String,
+    pub body: String,
+    /// Box corners in the body's position at t = 0 (length = dimension).
+    pub min: Vec<f64>,
+    pub max: Vec<f64>,
+}
+
 fn check_name(key: &str, name: &str, earlier: &[&str]) -> Result<(), CaseError> {
     if name.trim().is_empty() {
         return Err(CaseError(format!("{key}.name: must not be empty")));
@@ -74,6 +87,26 @@ impl Case {
                 return Err(CaseError(format!(
                     "{key}.point: {:?} is {phi:.4} from the surface of body {:?}; a marker must lie within one wall spacing ({spacing}) of it",
                     m.point, m.body
+                )));
+            }
+        }
+        for (i, pa) in self.patches.iter().enumerate() {
+            let key = format!("patch[{i}]");
+            let earlier: Vec<&str> = self.patches[..i].iter().map(|q| q.name.as_str()).collect();
+            check_name(&key, &pa.name, &earlier)?;
+            self.vec_len(&format!("{key}.min"), &pa.min)?;
+            self.vec_len(&format!("{key}.max"), &pa.max)?;
+            if let Some(k) = (0..pa.min.len()).find(|&k| pa.max[k] <= pa.min[k]) {
+                return Err(CaseError(format!(
+                    "{key}.max: must exceed min on every axis, axis {k}: {} ≤ {}",
+                    pa.max[k], pa.min[k]
+                )));
+            }
+            if !self.bodies.iter().any(|b| b.name == pa.body) {
+                let names: Vec<&str> = self.bodies.iter().map(|b| b.name.as_str()).collect();
+                return Err(CaseError(format!(
+                    "{key}.body: no body named {:?} (bodies: {names:?})",
+                    pa.body
                 )));
             }
         }

@@ -1,7 +1,11 @@
 //! The dimension-generic half of the Coupling: a `Simulation<D>` behind an object-safe trait,
 //! so `Coupling` itself is not generic.
 
-use super::{sampling, state, BodyKinematics, BodyLoads, CouplingError, ProbeValue, StepReport};
+use super::{
+    sampling, state, BodyKinematics, BodyLoads, CouplingError, PatchMembers, PatchValue,
+    ProbeValue, StepReport,
+};
+use crate::boundary::geometry::Shape;
 use crate::boundary::kinematics::{HeldPose, Pose};
 use crate::case::Case;
 use crate::particles::Vector;
@@ -17,6 +21,8 @@ pub(super) trait Engine: Send + Sync {
     fn loads(&self) -> Vec<BodyLoads>;
     fn probes(&self, points: &[[f64; 3]]) -> Vec<ProbeValue>;
     fn markers(&self, markers: &[(usize, [f64; 3])]) -> Vec<f64>;
+    fn patch_members(&self, specs: &[PatchSpec]) -> Vec<PatchMembers>;
+    fn patches(&self, members: &[PatchMembers]) -> Vec<PatchValue>;
     fn diagnostics(&self) -> Diagnostics;
     fn save(&self, fingerprint: u64) -> Vec<u8>;
     fn restore(&mut self, bytes: &[u8], fingerprint: u64) -> Result<(), String>;
@@ -33,6 +39,16 @@ pub(super) fn build(case: &Case) -> Result<Box<dyn Engine>, CouplingError> {
             )))
         }
     })
+}
+
+/// A patch as the case gives it, resolved to its body.
+pub(super) struct PatchSpec {
+    pub body: usize,
+    pub min: [f64; 3],
+    pub max: [f64; 3],
+    /// The body's wall spacing (the surface layer is −Δx ≤ φ < 0).
+    pub spacing: f64,
+    pub shape: Shape,
 }
 
 pub(super) struct Coupled<const D: usize> {
@@ -149,6 +165,62 @@ impl<const D: usize> Engine for Coupled<D> {
         markers
             .iter()
             .map(|(b, x)| sampling::marker_pressure(&self.sim.sys, *b, &vector::<D>(x)))
+            .collect()
+    }
+
+    fn patch_members(&self, specs: &[PatchSpec]) -> Vec<PatchMembers> {
+        let p = &self.sim.sys.particles;
+        specs
+            .iter()
+            .map(|s| {
+                let (mut all, mut surface) = (vec![], vec![]);
+                for i in 0..p.len() {
+                    let r = p.rest[i];
+                    if p.body[i] as usize != s.body + 1
+                        || !(0..D).all(|k| r[k] >= s.min[k] && r[k] <= s.max[k])
+                    {
+                        continue;
+                    }
+                    all.push(p.id[i]);
+                    let phi = s.shape.distance(&r);
+                    if phi < 0.0 && phi >= -s.spacing {
+                        surface.push(p.id[i]);
+                    }
+                }
+                PatchMembers {
+                    all,
+                    surface,
+                    cell_area: s.spacing.powi(D as i32 - 1),
+                }
+            })
+            .collect()
+    }
+
+    fn patches(&self, members: &[PatchMembers]) -> Vec<PatchValue> {
+        let p = &self.sim.sys.particles;
+        // stable id → current index (particles are reordered for locality)
+        let mut index = vec![0usize; p.len()];
+        for (i, &id) in p.id.iter().enumerate() {
+            index[id as usize] = i;
+        }
+        members
+            .iter()
+            .map(|m| {
+                let mut f = Vector::<D>::zeros();
+                for &id in &m.all {
+                    f += p.wall_force[index[id as usize]];
+                }
+                let pressures = m.surface.iter().map(|&id| p.pressure[index[id as usize]]);
+                let (sum, peak) = pressures.fold((0.0, f64::NEG_INFINITY), |(s, pk), x| {
+                    (s + x, f64::max(pk, x))
+                });
+                PatchValue {
+                    mean_pressure: sum / m.surface.len() as f64,
+                    peak_pressure: peak,
+                    area: m.surface.len() as f64 * m.cell_area,
+                    force: array(&f),
+                }
+            })
             .collect()
     }
 

@@ -132,6 +132,25 @@ pub struct ProbeValue {
     pub coverage: f64,
 }
 
+/// Loads on a `[[patch]]`: mean and peak pressure over its surface wall particles, its area
+/// (their count × Δx^{D−1}; 2D: per metre of depth) and the force of the fluid on all its
+/// wall particles.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PatchValue {
+    pub mean_pressure: f64,
+    pub peak_pressure: f64,
+    pub area: f64,
+    pub force: [f64; 3],
+}
+
+/// Which wall particles (stable ids) make up a patch.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct PatchMembers {
+    pub all: Vec<u32>,
+    pub surface: Vec<u32>,
+    pub cell_area: f64,
+}
+
 /// What one `step_to` did (for solver logging).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct StepReport {
@@ -144,6 +163,7 @@ pub struct Coupling {
     case: Case,
     engine: Box<dyn Engine>,
     pool: rayon::ThreadPool,
+    patches: Vec<PatchMembers>,
 }
 
 impl Coupling {
@@ -162,7 +182,39 @@ impl Coupling {
             .build()
             .map_err(|e| CouplingError(format!("threads: cannot start {threads} workers ({e})")))?;
         let engine = pool.install(|| engine::build(&case))?;
-        Ok(Self { case, engine, pool })
+        let specs: Vec<engine::PatchSpec> = case
+            .patches
+            .iter()
+            .map(|pa| {
+                let b = case
+                    .bodies
+                    .iter()
+                    .position(|b| b.name == pa.body)
+                    .expect("validated: the patch's body exists");
+                engine::PatchSpec {
+                    body: b,
+                    min: pad(&pa.min),
+                    max: pad(&pa.max),
+                    spacing: case.bodies[b]
+                        .spacing
+                        .unwrap_or_else(|| case.finest_spacing()),
+                    shape: case.bodies[b].shape.clone(),
+                }
+            })
+            .collect();
+        let patches = engine.patch_members(&specs);
+        if let Some(i) = patches.iter().position(|m| m.surface.is_empty()) {
+            return Err(CouplingError(format!(
+                "patch[{i}]: the box {:?}..{:?} holds no surface wall particle of body {:?}",
+                case.patches[i].min, case.patches[i].max, case.patches[i].body
+            )));
+        }
+        Ok(Self {
+            case,
+            engine,
+            pool,
+            patches,
+        })
     }
 
     /// [`Self::new`] for a case file.
@@ -299,6 +351,11 @@ impl Coupling {
             })
             .collect();
         self.pool.install(|| self.engine.markers(&markers))
+    }
+
+    /// Loads on every `[[patch]]`, in case order.
+    pub fn patches(&self) -> Vec<PatchValue> {
+        self.engine.patches(&self.patches)
     }
 
     /// Time, steps, particle count, fluid mass, momentum and energy.

@@ -82,7 +82,8 @@ def session_tank_gravity(fmu_path):
                     (0.6, (0.0, -19.62, 0.0)), (1.4, (0.0, -19.62, 0.0))],
                    dtype=[("time", "f8"), ("gravity", "f8", (3,))])
     res = simulate_fmu(fmu_path, stop_time=1.4, step_size=0.02, output_interval=0.02, input=sig,
-                       start_values={"threads": 2}, output=["tank.force", "diag.mass", "diag.particles"])
+                       start_values={"threads": 2}, output=["tank.force", "diag.mass", "diag.particles",
+                               "patch.floor.mean_pressure", "patch.floor.area"])
     t = res["time"]
     fy = res["tank.force"][:, 1]
     mass = res["diag.mass"][-1]
@@ -94,6 +95,10 @@ def session_tank_gravity(fmu_path):
         "particles": int(res["diag.particles"][-1]),
         "mass_drift": float(abs(res["diag.mass"][-1] / res["diag.mass"][0] - 1)),
         "finite": bool(np.all(np.isfinite(fy))),
+        # floor wall layer Δx/2 under the floor: 2e4 Pa at the lid, mean ρ 1030.5 kg/m³
+        "floor_pressure": float(res["patch.floor.mean_pressure"][w1].mean()
+                                / (2e4 + 1030.5 * 9.81 * 0.51)),
+        "floor_area": float(res["patch.floor.area"][-1]),
     }
 
 
