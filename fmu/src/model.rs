@@ -40,6 +40,30 @@ struct Params {
     resolution: f64,
     cfl: f64,
     threads: i64,
+    output_dir: String,
+    output_interval: f64,
+}
+
+impl Params {
+    fn start(case: String) -> Params {
+        Params {
+            case,
+            scheme: String::new(),
+            resolution: 1.0,
+            cfl: 0.0,
+            threads: 0,
+            output_dir: String::new(),
+            output_interval: 0.0,
+        }
+    }
+}
+
+/// Snapshots written from inside the FMU (`output_dir`): the entries of snapshots.pvd and
+/// the next output time.
+#[derive(Debug, Clone, Default)]
+struct Output {
+    written: Vec<(f64, String)>,
+    next: f64,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -64,6 +88,7 @@ pub struct Instance {
     params: Params,
     inputs: Inputs,
     coupling: Option<Coupling>,
+    output: Output,
     pub mode: Mode,
     start_time: f64,
     logger: Logger,
@@ -94,13 +119,7 @@ impl Instance {
         let packaged = Case::load(&resources.join(&case_file))
             .map_err(|e| format!("resources/{case_file}: {}", e.0))?;
         let table = Table::new(&packaged, &case_file);
-        let params = Params {
-            case: case_file,
-            scheme: String::new(),
-            resolution: 1.0,
-            cfl: 0.0,
-            threads: 0,
-        };
+        let params = Params::start(case_file);
         let inputs = start_inputs(&table);
         Ok(Instance {
             name: name.to_string(),
@@ -110,6 +129,7 @@ impl Instance {
             params,
             inputs,
             coupling: None,
+            output: Output::default(),
             mode: Mode::Instantiated,
             start_time: 0.0,
             logger,
@@ -171,6 +191,8 @@ impl Instance {
         self.ensure_coupling()?;
         self.apply_inputs()?;
         self.mode = Mode::Step;
+        self.output = Output::default();
+        self.write_output()?;
         let c = self.coupling.as_ref().expect("built above");
         let d = c.diagnostics();
         self.log(
@@ -259,7 +281,7 @@ impl Instance {
                     r.dt_max
                 );
                 self.log(Status::Ok, "logSolver", &msg);
-                Ok(())
+                self.write_output()
             }
             Err(e) => {
                 self.mode = Mode::Failed;
@@ -267,6 +289,31 @@ impl Instance {
                     "the solver failed ({e}); restore a saved FMU state or reset"
                 ))
             }
+        }
+    }
+
+    /// A snapshot when `output_dir` is set and the output time has come; a file-system
+    /// failure is a warning (the simulation itself is fine).
+    fn write_output(&mut self) -> CallResult<()> {
+        let dir = self.params.output_dir.trim();
+        let Some(c) = &self.coupling else {
+            return Ok(());
+        };
+        // (the output time may be missed by a rounding of the master's time grid)
+        if dir.is_empty() || c.time() < self.output.next - 1e-9 * self.output.next.abs().max(1.0) {
+            return Ok(());
+        }
+        let index = self.output.written.len();
+        match c.write_snapshot(Path::new(dir), index, &self.output.written) {
+            Ok(entry) => {
+                self.output.written.push(entry);
+                self.output.next = c.time() + self.params.output_interval;
+                Ok(())
+            }
+            Err(e) => Err((
+                Status::Warning,
+                format!("output_dir: snapshot not written ({})", e.0),
+            )),
         }
     }
 
@@ -283,16 +330,11 @@ impl Instance {
     /// Back to the state after instantiation: start values, no solver.
     pub fn reset(&mut self) {
         self.coupling = None;
-        self.params = Params {
-            case: match &self.table.variables[1].start {
-                Start::Text(t) => t.clone(),
-                _ => unreachable!("variable 1 is the case parameter"),
-            },
-            scheme: String::new(),
-            resolution: 1.0,
-            cfl: 0.0,
-            threads: 0,
-        };
+        self.params = Params::start(match &self.table.variables[1].start {
+            Start::Text(t) => t.clone(),
+            _ => unreachable!("variable 1 is the case parameter"),
+        });
+        self.output = Output::default();
         self.inputs = start_inputs(&self.table);
         self.start_time = 0.0;
         self.mode = Mode::Instantiated;
@@ -354,6 +396,13 @@ impl Instance {
                 self.params.resolution = r;
                 self.coupling = None;
             }
+            Binding::Param(Param::OutputInterval) => {
+                let dt = values[0];
+                if dt < 0.0 {
+                    return err(format!("output_interval: must be ≥ 0, got {dt}"));
+                }
+                self.params.output_interval = dt;
+            }
             Binding::Param(Param::Cfl) => {
                 let c = values[0];
                 if !(0.0..=1.0).contains(&c) {
@@ -414,6 +463,10 @@ impl Instance {
                 self.params.case = value.to_string();
             }
             Binding::Param(Param::Scheme) => self.params.scheme = value.to_string(),
+            Binding::Param(Param::OutputDir) => {
+                self.params.output_dir = value.to_string();
+                return Ok(());
+            }
             _ => return err(format!("{}: cannot be set", self.table.variables[i].name)),
         }
         self.coupling = None;
@@ -429,6 +482,7 @@ impl Instance {
             Binding::Time => vec![self.time()],
             Binding::Param(Param::Resolution) => vec![self.params.resolution],
             Binding::Param(Param::Cfl) => vec![self.params.cfl],
+            Binding::Param(Param::OutputInterval) => vec![self.params.output_interval],
             Binding::Gravity => self.inputs.gravity.to_vec(),
             Binding::BodyPosition(b) => self.inputs.bodies[ext(b)].position.to_vec(),
             Binding::BodyVelocity(b) => self.inputs.bodies[ext(b)].velocity.to_vec(),
@@ -492,6 +546,7 @@ impl Instance {
         match self.table.variables[i].binding {
             Binding::Param(Param::Case) => Ok(self.params.case.clone()),
             Binding::Param(Param::Scheme) => Ok(self.params.scheme.clone()),
+            Binding::Param(Param::OutputDir) => Ok(self.params.output_dir.clone()),
             _ => err(format!("{}: not a string", self.table.variables[i].name)),
         }
     }

@@ -33,6 +33,8 @@ pub enum Param {
     Resolution,
     Cfl,
     Threads,
+    OutputDir,
+    OutputInterval,
 }
 
 /// What a variable reads or writes.
@@ -258,6 +260,27 @@ impl Table {
             None,
             "Worker threads of this instance, in [0, 1024]; 0 = one per core".into(),
             Binding::Param(Param::Threads),
+        );
+        add(
+            "output_dir".into(),
+            Kind::String,
+            Parameter,
+            1,
+            Start::Text(String::new()),
+            None,
+            "Folder for VTU snapshots of the particles and snapshots.pvd (ParaView); empty = none"
+                .into(),
+            Binding::Param(Param::OutputDir),
+        );
+        add(
+            "output_interval".into(),
+            Kind::Float64,
+            Parameter,
+            1,
+            Start::Float(vec![0.0]),
+            Some("s"),
+            "Simulation time between snapshots, ≥ 0; 0 = after every doStep".into(),
+            Binding::Param(Param::OutputInterval),
         );
         add("gravity".into(), Kind::Float64, Input, 3,
             Start::Float(pad3(case.gravity.as_deref().unwrap_or(&[]))), Some("m/s2"),

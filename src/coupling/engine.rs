@@ -24,6 +24,7 @@ pub(super) trait Engine: Send + Sync {
     fn patch_members(&self, specs: &[PatchSpec]) -> Vec<PatchMembers>;
     fn patches(&self, members: &[PatchMembers]) -> Vec<PatchValue>;
     fn diagnostics(&self) -> Diagnostics;
+    fn write_vtu(&self, path: &std::path::Path) -> std::io::Result<()>;
     fn save(&self, fingerprint: u64) -> Vec<u8>;
     fn restore(&mut self, bytes: &[u8], fingerprint: u64) -> Result<(), String>;
 }
@@ -226,6 +227,10 @@ impl<const D: usize> Engine for Coupled<D> {
 
     fn diagnostics(&self) -> Diagnostics {
         self.sim.diagnostics()
+    }
+
+    fn write_vtu(&self, path: &std::path::Path) -> std::io::Result<()> {
+        crate::io::write_vtu(path, &self.sim.sys.particles, self.sim.time)
     }
 
     fn save(&self, fingerprint: u64) -> Vec<u8> {

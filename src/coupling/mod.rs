@@ -363,6 +363,30 @@ impl Coupling {
         self.pool.install(|| self.engine.diagnostics())
     }
 
+    /// Write the particles as `dir/snapshot_NNNNN.vtu` (NNNNN = `index`) and the ParaView
+    /// collection `dir/snapshots.pvd` listing `written` plus this one; returns the entry to
+    /// keep for the next call.
+    pub fn write_snapshot(
+        &self,
+        dir: &Path,
+        index: usize,
+        written: &[(f64, String)],
+    ) -> Result<(f64, String), CouplingError> {
+        let fail = |p: &Path, e: std::io::Error| CouplingError(format!("{}: {e}", p.display()));
+        std::fs::create_dir_all(dir).map_err(|e| fail(dir, e))?;
+        let name = format!("snapshot_{index:05}.vtu");
+        let path = dir.join(&name);
+        self.pool
+            .install(|| self.engine.write_vtu(&path))
+            .map_err(|e| fail(&path, e))?;
+        let entry = (self.time(), name);
+        let mut all = written.to_vec();
+        all.push(entry.clone());
+        let pvd = dir.join("snapshots.pvd");
+        crate::io::write_pvd(&pvd, &all).map_err(|e| fail(&pvd, e))?;
+        Ok(entry)
+    }
+
     /// The whole solver state as bytes; [`Self::restore`] of them continues bit for bit as
     /// this instance would.
     pub fn save(&self) -> Vec<u8> {

@@ -77,6 +77,21 @@ pub fn write_vtu<const D: usize>(path: &Path, p: &Particles<D>, time: f64) -> io
 }
 
 /// Snapshot as CSV with columns x,y,z,vx,vy,vz,m,h,rho,u,P,cs,id,material (sarracen/pandas names).
+/// A ParaView collection (`.pvd`): the VTU files (names relative to it) at their times, so
+/// they open as one time series.
+pub fn write_pvd(path: &Path, entries: &[(f64, String)]) -> io::Result<()> {
+    let mut s = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
+    );
+    for (t, name) in entries {
+        s.push_str(&format!(
+            "<DataSet timestep=\"{t:e}\" part=\"0\" file=\"{name}\"/>\n"
+        ));
+    }
+    s.push_str("</Collection>\n</VTKFile>\n");
+    std::fs::write(path, s)
+}
+
 pub fn write_csv<const D: usize>(path: &Path, p: &Particles<D>) -> io::Result<()> {
     let mut s = String::with_capacity(p.len() * 160);
     s.push_str("x,y,z,vx,vy,vz,m,h,rho,u,P,cs,id,material\n");

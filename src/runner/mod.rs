@@ -168,19 +168,16 @@ impl Snapshots {
         if !self.formats.contains(&SnapshotFormat::Vtu) {
             return Ok(());
         }
-        let mut s = String::from("<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n");
-        for (t, p) in &self.written {
-            let name = p
-                .file_name()
-                .map(|n| n.to_string_lossy().to_string())
-                .unwrap_or_default();
-            s.push_str(&format!(
-                "<DataSet timestep=\"{t:e}\" part=\"0\" file=\"{name}\"/>\n"
-            ));
-        }
-        s.push_str("</Collection>\n</VTKFile>\n");
+        let entries: Vec<(f64, String)> = self
+            .written
+            .iter()
+            .map(|(t, p)| {
+                let name = p.file_name().map(|n| n.to_string_lossy().to_string());
+                (*t, name.unwrap_or_default())
+            })
+            .collect();
         let path = self.dir.join("snapshots.pvd");
-        std::fs::write(&path, s).map_err(|e| io_err(&path, e))
+        io::write_pvd(&path, &entries).map_err(|e| io_err(&path, e))
     }
 }
 

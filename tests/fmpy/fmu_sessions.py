@@ -306,6 +306,29 @@ def session_blowup_and_reset(fmu_path, fmi):
     return out
 
 
+def session_snapshots(fmu_path, out_dir):
+    """VTU snapshots from inside the FMU: output_dir and output_interval."""
+    import meshio
+    md = read_model_description(fmu_path)
+    fmu, vr = open_fmu(fmu_path, init=False)
+    fmu.enterInitializationMode(startTime=0.0)
+    fmu.setInt64([vr["threads"]], [2])
+    fmu.setString([vr["output_dir"]], [out_dir])
+    fmu.setFloat64([vr["output_interval"]], [0.1])
+    fmu.exitInitializationMode()
+    t = 0.0
+    for _ in range(6):
+        fmu.doStep(t, 0.05)
+        t += 0.05
+    fmu.terminate()
+    fmu.freeInstance()
+    pvd = (pathlib.Path(out_dir) / "snapshots.pvd").read_text()
+    files = sorted(p.name for p in pathlib.Path(out_dir).glob("*.vtu"))
+    points = meshio.read(str(pathlib.Path(out_dir) / files[-1])).points.shape[0]
+    return {"files": files, "times": pvd.count("<DataSet"), "points": points,
+            "variables": len(md.modelVariables)}
+
+
 if __name__ == "__main__":
     name, args = sys.argv[1], json.loads(sys.argv[2]) if len(sys.argv) > 2 else {}
     result = globals()["session_" + name](**args)

@@ -126,3 +126,10 @@ def test_a_blowup_is_an_error_and_restore_or_reset_recovers(fmi):
     assert any("the solver failed (unstable: non-finite" in m for m in r["log"]), r["log"]
     assert abs(r["after_restore"] - 0.2) < 0.01
     assert r["after_reset"] == r["fresh"], "reset must reproduce a fresh instance"
+
+
+def test_snapshots_from_inside_the_fmu(tmp_path):
+    r = session("snapshots", fmu_path=str(FMU3), out_dir=str(tmp_path / "vtu"))
+    # t = 0, 0.1, 0.2, 0.3 with communication steps of 0.05
+    assert r["files"] == [f"snapshot_{k:05}.vtu" for k in range(4)], r
+    assert r["times"] == 4 and r["points"] == 628
