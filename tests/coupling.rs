@@ -212,11 +212,6 @@ name = "wall"
 body = "tank"
 point = [0.0, 0.25]
 [[patch]]
-name = "floor"
-body = "tank"
-min = [0.1, -0.2]
-max = [0.9, 0.0]
-[[patch]]
 name = "lid"
 body = "tank"
 min = [0.1, 0.5]
@@ -270,7 +265,7 @@ max = [0.9, 0.7]
     assert!((p.coverage - 1.0).abs() < 0.01 && p.velocity[1].abs() < 0.01);
     assert!((m[0] / exact(0.0) - 1.0).abs() < 0.015);
     assert!((m[1] / exact(0.25) - 1.0).abs() < 0.03);
-    // patches: 40 surface particles each (0.8 m per metre of depth); the first wall layer
+    // patches: the model's floor and the lid above; 40 surface particles each (0.8 m per metre of depth); the first wall layer
     // lies Δx/2 beyond the floor and the lid
     let [floor, lid] = patches;
     println!("patches: floor {floor:?}, lid {lid:?}");
