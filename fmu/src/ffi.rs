@@ -1,7 +1,7 @@
 //! What both C faces share: panic containment and C strings.
 
 use crate::model::{CallResult, Instance, Status};
-use std::ffi::{c_char, CStr};
+use std::ffi::{c_char, c_int, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 /// Run `f`; a panic becomes `Fatal` instead of unwinding into the master (which would abort
@@ -72,26 +72,57 @@ pub unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
     }
 }
 
-/// What a C handle points to: something holding an instance.
-pub trait Handle {
-    fn instance(&mut self) -> &mut Instance;
+/// What a C handle of either FMI version points to: the instance and what the C face keeps
+/// beside it.
+pub struct Fmu {
+    pub inst: Instance,
+    /// FMI 2.0's setupExperiment start time (FMI 3.0 passes it to enterInitializationMode).
+    pub start_time: f64,
+    /// Strings handed out by the string getters stay valid until the next call.
+    pub strings: Vec<CString>,
 }
 
-/// Run `f` on the `H` behind the handle `p` (NULL: Error); a rejected call is logged in
+impl Fmu {
+    pub fn new(inst: Instance) -> Box<Fmu> {
+        Box::new(Fmu {
+            inst,
+            start_time: 0.0,
+            strings: vec![],
+        })
+    }
+
+    /// Point `out` at C copies of `values`, kept until the next call.
+    pub fn hand_out(&mut self, values: Vec<String>, out: &mut [*const c_char]) {
+        self.strings = values
+            .into_iter()
+            .map(|s| CString::new(s).unwrap_or_default())
+            .collect();
+        for (o, s) in out.iter_mut().zip(&self.strings) {
+            *o = s.as_ptr();
+        }
+    }
+}
+
+/// A rejected call with status Error.
+pub fn bad(msg: impl Into<String>) -> CallResult<()> {
+    Err((Status::Error, msg.into()))
+}
+
+/// Run `f` on the `Fmu` behind the handle `p` (NULL: Error); a rejected call is logged in
 /// `logStatusError` / `logStatusWarning` with the C function's name and becomes its status;
-/// a panic becomes Fatal.
+/// a panic becomes Fatal. (fmi2Status and fmi3Status are both C ints with the same codes.)
 ///
 /// # Safety
-/// `p` is NULL or a handle made by this crate for an `H`.
-pub unsafe fn with<H: Handle>(
+/// `p` is NULL or a handle made by this crate.
+pub unsafe fn with(
     p: *mut std::ffi::c_void,
     call: &str,
-    f: impl FnOnce(&mut H) -> CallResult<()>,
-) -> Status {
+    f: impl FnOnce(&mut Fmu) -> CallResult<()>,
+) -> c_int {
     if p.is_null() {
-        return Status::Error;
+        return Status::Error as c_int;
     }
-    let h = &mut *(p as *mut H);
+    let h = &mut *(p as *mut Fmu);
     guard(|| match f(h) {
         Ok(()) => Status::Ok,
         Err((status, msg)) => {
@@ -100,8 +131,8 @@ pub unsafe fn with<H: Handle>(
             } else {
                 "logStatusWarning"
             };
-            h.instance().log(status, cat, &format!("{call}: {msg}"));
+            h.inst.log(status, cat, &format!("{call}: {msg}"));
             status
         }
-    })
+    }) as c_int
 }

@@ -2,7 +2,7 @@
 //! three scalars (`name[1]`..`name[3]`); Int64 variables as Integer (saturated to i32).
 #![allow(non_snake_case, clippy::missing_safety_doc, clippy::too_many_arguments)]
 
-use crate::ffi::{slice, slice_mut, text, uri_to_path};
+use crate::ffi::{bad, slice, slice_mut, text, uri_to_path, with, Fmu};
 use crate::model::{CallResult, Instance, Status};
 use crate::state_ffi;
 use crate::table::Kind;
@@ -21,26 +21,6 @@ pub struct Callbacks {
     free_memory: *mut c_void,
     step_finished: *mut c_void,
     component_environment: *mut c_void,
-}
-
-pub struct Fmu2 {
-    inst: Instance,
-    start_time: f64,
-    strings: Vec<CString>,
-}
-
-unsafe fn with(p: Comp, call: &str, f: impl FnOnce(&mut Fmu2) -> CallResult<()>) -> c_int {
-    crate::ffi::with::<Fmu2>(p, call, f) as c_int
-}
-
-impl crate::ffi::Handle for Fmu2 {
-    fn instance(&mut self) -> &mut Instance {
-        &mut self.inst
-    }
-}
-
-fn bad(msg: impl Into<String>) -> CallResult<()> {
-    Err((Status::Error, msg.into()))
 }
 
 /// A message as the logger's format string: '%' doubled so printf-style masters print it.
@@ -90,7 +70,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
             );
         }
     };
-    let r = std::panic::catch_unwind(|| -> Result<Box<Fmu2>, String> {
+    let r = std::panic::catch_unwind(|| -> Result<Box<Fmu>, String> {
         let name = text(instance_name).ok_or("instanceName is NULL or not UTF-8")?;
         if fmu_type != 1 {
             return Err("fmuType: sphfmu is a co-simulation FMU only (fmi2CoSimulation)".into());
@@ -129,11 +109,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
             "logEvents",
             &format!("instantiated {name:?} (FMI 2.0 co-simulation)"),
         );
-        Ok(Box::new(Fmu2 {
-            inst,
-            start_time: 0.0,
-            strings: vec![],
-        }))
+        Ok(Fmu::new(inst))
     });
     match r {
         Ok(Ok(b)) => Box::into_raw(b) as Comp,
@@ -151,7 +127,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
 #[no_mangle]
 pub unsafe extern "C" fn fmi2FreeInstance(p: Comp) {
     if !p.is_null() {
-        let _ = std::panic::catch_unwind(|| drop(Box::from_raw(p as *mut Fmu2)));
+        let _ = std::panic::catch_unwind(|| drop(Box::from_raw(p as *mut Fmu)));
     }
 }
 
@@ -367,15 +343,12 @@ pub unsafe extern "C" fn fmi2GetString(
     with(p, "fmi2GetString", |f| {
         let vrs = slice(vrs, nvr).ok_or((Status::Error, "vr is NULL".into()))?;
         let out = slice_mut(values, nvr).ok_or((Status::Error, "value is NULL".into()))?;
-        f.strings.clear();
+        let mut values = vec![];
         for &vr in vrs {
             let (i, _) = scalar(&f.inst, vr, Kind::String)?;
-            let s = f.inst.get_string(i)?;
-            f.strings.push(CString::new(s).unwrap_or_default());
+            values.push(f.inst.get_string(i)?);
         }
-        for (o, s) in out.iter_mut().zip(&f.strings) {
-            *o = s.as_ptr();
-        }
+        f.hand_out(values, out);
         Ok(())
     })
 }

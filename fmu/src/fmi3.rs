@@ -4,7 +4,7 @@
 //! master) and checks its pointers.
 #![allow(non_snake_case, clippy::missing_safety_doc, clippy::too_many_arguments)]
 
-use crate::ffi::{slice, slice_mut, text};
+use crate::ffi::{bad, slice, slice_mut, text, with, Fmu};
 use crate::model::{CallResult, Instance, Status};
 use crate::state_ffi;
 use crate::table::Kind;
@@ -14,27 +14,6 @@ use std::path::Path;
 type Inst = *mut c_void;
 type Vr = u32;
 type LogFn = unsafe extern "C" fn(*mut c_void, i32, *const c_char, *const c_char);
-
-pub struct Fmu3 {
-    inst: Instance,
-    /// Strings handed out by fmi3GetString stay valid until the next call.
-    strings: Vec<CString>,
-}
-
-/// Run `f` on the instance behind `p`; errors are logged and turned into their status.
-unsafe fn with(p: Inst, call: &str, f: impl FnOnce(&mut Fmu3) -> CallResult<()>) -> i32 {
-    crate::ffi::with::<Fmu3>(p, call, f) as i32
-}
-
-impl crate::ffi::Handle for Fmu3 {
-    fn instance(&mut self) -> &mut Instance {
-        &mut self.inst
-    }
-}
-
-fn bad(msg: impl Into<String>) -> CallResult<()> {
-    Err((Status::Error, msg.into()))
-}
 
 /// Value references and values of a get on scalar variables (nValues must equal nvr).
 unsafe fn scalars_out<'a, T>(
@@ -120,7 +99,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
     log_message: Option<LogFn>,
     _intermediate_update: *mut c_void,
 ) -> Inst {
-    let r = std::panic::catch_unwind(|| -> Result<Box<Fmu3>, String> {
+    let r = std::panic::catch_unwind(|| -> Result<Box<Fmu>, String> {
         let name = text(instance_name).ok_or("instanceName is NULL or not UTF-8")?;
         let res = text(resource_path)
             .ok_or("resourcePath is NULL: the FMU needs its resources folder (case files)")?;
@@ -149,10 +128,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
             "logEvents",
             &format!("instantiated {name:?} (FMI 3.0 co-simulation)"),
         );
-        Ok(Box::new(Fmu3 {
-            inst,
-            strings: vec![],
-        }))
+        Ok(Fmu::new(inst))
     });
     match r {
         Ok(Ok(b)) => Box::into_raw(b) as Inst,
@@ -221,7 +197,7 @@ pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
 #[no_mangle]
 pub unsafe extern "C" fn fmi3FreeInstance(p: Inst) {
     if !p.is_null() {
-        let _ = std::panic::catch_unwind(|| drop(Box::from_raw(p as *mut Fmu3)));
+        let _ = std::panic::catch_unwind(|| drop(Box::from_raw(p as *mut Fmu)));
     }
 }
 
@@ -396,15 +372,12 @@ pub unsafe extern "C" fn fmi3GetString(
 ) -> i32 {
     with(p, "fmi3GetString", |f| {
         let (vrs, out) = scalars_out(vrs, nvr, values, n_values)?;
-        f.strings.clear();
+        let mut values = vec![];
         for &vr in vrs {
             let i = f.inst.var3(vr, Kind::String)?;
-            let s = f.inst.get_string(i)?;
-            f.strings.push(CString::new(s).unwrap_or_default());
+            values.push(f.inst.get_string(i)?);
         }
-        for (o, s) in out.iter_mut().zip(&f.strings) {
-            *o = s.as_ptr();
-        }
+        f.hand_out(values, out);
         Ok(())
     })
 }
