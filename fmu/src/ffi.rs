@@ -136,3 +136,30 @@ pub unsafe fn with(
         }
     }) as c_int
 }
+
+/// A C array of `n` strings (`what` names it in the error).
+///
+/// # Safety
+/// `p` points to `n` pointers, each NULL or to a NUL-terminated string, when n > 0.
+pub unsafe fn strings(p: *const *const c_char, n: usize, what: &str) -> CallResult<Vec<String>> {
+    let items = slice(p, n).ok_or((Status::Error, format!("{what} is NULL")))?;
+    items
+        .iter()
+        .map(|&c| {
+            text(c).map(str::to_string).ok_or((
+                Status::Error,
+                format!("one of the {what} is NULL or not UTF-8"),
+            ))
+        })
+        .collect()
+}
+
+/// Drop the instance behind a handle (NULL: nothing), panic-safe.
+///
+/// # Safety
+/// `p` is NULL or a handle made by this crate, not used afterwards.
+pub unsafe fn free_instance(p: *mut std::ffi::c_void) {
+    if !p.is_null() {
+        let _ = std::panic::catch_unwind(|| drop(Box::from_raw(p as *mut Fmu)));
+    }
+}

@@ -64,15 +64,7 @@ pub unsafe extern "C" fn fmi3SetDebugLogging(
     categories: *const *const c_char,
 ) -> i32 {
     with(p, "fmi3SetDebugLogging", |f| {
-        let cats = slice(categories, n).ok_or((Status::Error, "categories is NULL".into()))?;
-        let mut names = vec![];
-        for &c in cats {
-            names.push(
-                text(c)
-                    .ok_or((Status::Error, "a category is NULL or not UTF-8".into()))?
-                    .to_string(),
-            );
-        }
+        let names = crate::ffi::strings(categories, n, "categories")?;
         f.inst.set_debug_logging(logging_on, names)
     })
 }
@@ -196,9 +188,7 @@ pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi3FreeInstance(p: Inst) {
-    if !p.is_null() {
-        let _ = std::panic::catch_unwind(|| drop(Box::from_raw(p as *mut Fmu)));
-    }
+    crate::ffi::free_instance(p);
 }
 
 #[no_mangle]
