@@ -15,6 +15,30 @@ type Inst = *mut c_void;
 type Vr = u32;
 type LogFn = unsafe extern "C" fn(*mut c_void, i32, *const c_char, *const c_char);
 
+/// The Float64 variables of `vrs` and where each one's elements sit in a flat buffer of
+/// `n_values` (arrays take `size` consecutive values); nValues must be their total.
+fn float_spans(
+    inst: &Instance,
+    vrs: &[Vr],
+    n_values: usize,
+) -> CallResult<Vec<(usize, std::ops::Range<usize>)>> {
+    let mut at = 0;
+    let mut spans = Vec::with_capacity(vrs.len());
+    for &vr in vrs {
+        let i = inst.var3(vr, Kind::Float64)?;
+        let size = inst.table.variables[i].size;
+        spans.push((i, at..at + size));
+        at += size;
+    }
+    if at != n_values {
+        return Err((
+            Status::Error,
+            format!("nValues = {n_values} but the variables hold {at}"),
+        ));
+    }
+    Ok(spans)
+}
+
 /// Value references and values of a get on scalar variables (nValues must equal nvr).
 unsafe fn scalars_out<'a, T>(
     vrs: *const Vr,
@@ -263,20 +287,8 @@ pub unsafe extern "C" fn fmi3GetFloat64(
     with(p, "fmi3GetFloat64", |f| {
         let vrs = slice(vrs, nvr).ok_or((Status::Error, "valueReferences is NULL".into()))?;
         let out = slice_mut(values, n_values).ok_or((Status::Error, "values is NULL".into()))?;
-        let mut at = 0;
-        for &vr in vrs {
-            let i = f.inst.var3(vr, Kind::Float64)?;
-            let v = f.inst.get_f64(i)?;
-            if at + v.len() > out.len() {
-                return bad(format!(
-                    "nValues = {n_values} is less than the variables hold"
-                ));
-            }
-            out[at..at + v.len()].copy_from_slice(&v);
-            at += v.len();
-        }
-        if at != n_values {
-            return bad(format!("nValues = {n_values} but the variables hold {at}"));
+        for (i, span) in float_spans(&f.inst, vrs, n_values)? {
+            out[span].copy_from_slice(&f.inst.get_f64(i)?);
         }
         Ok(())
     })
@@ -294,20 +306,8 @@ pub unsafe extern "C" fn fmi3SetFloat64(
         let vrs = slice(vrs, nvr).ok_or((Status::Error, "valueReferences is NULL".into()))?;
         let vals = slice(values, n_values).ok_or((Status::Error, "values is NULL".into()))?;
         f.inst.atomically(|inst| {
-            let mut at = 0;
-            for &vr in vrs {
-                let i = inst.var3(vr, Kind::Float64)?;
-                let size = inst.table.variables[i].size;
-                if at + size > vals.len() {
-                    return bad(format!(
-                        "nValues = {n_values} is less than the variables hold"
-                    ));
-                }
-                inst.set_f64(i, 0, &vals[at..at + size])?;
-                at += size;
-            }
-            if at != n_values {
-                return bad(format!("nValues = {n_values} but the variables hold {at}"));
+            for (i, span) in float_spans(inst, vrs, n_values)? {
+                inst.set_f64(i, 0, &vals[span])?;
             }
             Ok(())
         })
