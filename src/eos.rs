@@ -38,6 +38,23 @@ fn default_tait_gamma() -> f64 {
 }
 
 impl EosConfig {
+    /// The constant P_off that turns P into the part that scales like an ideal gas's
+    /// pressure, P + P_off > 0 for every admissible state: 0 for ideal and isothermal gases,
+    /// B − P_bg for Tait (P + P_off = B (ρ/ρ0)^γ), γP∞ for a stiffened gas
+    /// (P + P_off = (γ−1) ρ u). Rosswog's X = P^k volume element reads it (see there).
+    pub fn pressure_offset(&self) -> f64 {
+        match *self {
+            EosConfig::IdealGas { .. } | EosConfig::Isothermal { .. } => 0.0,
+            EosConfig::Tait {
+                rho0,
+                sound_speed,
+                gamma,
+                background_pressure,
+            } => rho0 * sound_speed * sound_speed / gamma - background_pressure,
+            EosConfig::StiffenedGas { gamma, p_inf } => gamma * p_inf,
+        }
+    }
+
     /// Check ranges; the error names the key and the allowed range.
     pub fn validate(&self) -> Result<(), String> {
         let pos = |name: &str, v: f64| -> Result<(), String> {

@@ -77,6 +77,13 @@ pub struct System<const D: usize> {
     /// The scheme evolves ρ by the continuity equation (`particles.drhodt`): the integrators
     /// advance it with x, v and u.
     pub evolve_density: bool,
+    /// Keep wall–wall pairs in the working list: schemes whose per-particle sums need a wall
+    /// particle's full neighbourhood (CRKSPH's volumes and reproducing coefficients, Rosswog's
+    /// IA matrices) set it; their force passes skip those pairs (see `wall_pair`).
+    pub wall_pairs: bool,
+    /// The non-inertial frame the computation runs in (`[frame]`), if any: every particle
+    /// then feels its fictitious accelerations besides `gravity` (see `boundary::frame`).
+    pub frame: Option<crate::boundary::frame::Frame<D>>,
 }
 
 /// A neighbour list with a skin, the positions and radii it was built for.
@@ -158,7 +165,7 @@ impl<const D: usize> System<D> {
     }
 
     /// The working list: the master list cut to `max(2h_a, 2h_b)` once h is final, without
-    /// wall–wall pairs (no sum or force needs them).
+    /// wall–wall pairs unless the scheme asked for them (`wall_pairs`).
     pub fn compact_neighbours(&mut self) {
         let t0 = std::time::Instant::now();
         let p = &self.particles;
@@ -166,7 +173,7 @@ impl<const D: usize> System<D> {
         let k = &self.kernel;
         self.neighbours = self.verlet.list.filtered(|a, e| {
             let (b, code) = unpack(e);
-            if p.body[a] != 0 && p.body[b] != 0 {
+            if !self.wall_pairs && p.body[a] != 0 && p.body[b] != 0 {
                 return false;
             }
             let r = k.radius(p.h[a]).max(k.radius(p.h[b]));
@@ -204,6 +211,34 @@ impl<const D: usize> System<D> {
                 let f = (dt * dv / d).clamp(-0.2, 0.2);
                 *h *= 1.0 + f;
             });
+    }
+
+    /// The uniform body force in the computation's coordinates: g, or in a moving frame
+    /// Rᵀ(g − A) (its origin's acceleration removed).
+    pub fn uniform_body_force(&self) -> Vector<D> {
+        match &self.frame {
+            Some(f) => f.uniform(&self.gravity),
+            None => self.gravity,
+        }
+    }
+
+    /// Body force per unit mass on a particle at x moving at v: g, plus the frame's Euler,
+    /// Coriolis and centrifugal terms in a rotating frame. `uniform` is
+    /// [`Self::uniform_body_force`], computed once per pass.
+    #[inline]
+    pub fn body_force(&self, uniform: &Vector<D>, x: &Vector<D>, v: &Vector<D>) -> Vector<D> {
+        match &self.frame {
+            Some(f) => f.body_force(uniform, x, v),
+            None => *uniform,
+        }
+    }
+
+    /// Both particles of the pair belong to bodies: rigid walls exert no force on each other
+    /// (their loads are what the fluid exerts), so force passes skip such pairs.
+    #[inline(always)]
+    pub fn wall_pair(&self, a: usize, b: usize) -> bool {
+        let body = &self.particles.body;
+        body[a] != 0 && body[b] != 0
     }
 
     /// The neighbour loop, written once: for every particle a (in parallel), call
@@ -300,9 +335,10 @@ impl<const D: usize> System<D> {
         self.stats.seconds_forces += started.elapsed().as_secs_f64();
         self.stats.force_pairs = self.neighbours.total_pairs() as u64;
         self.stats.total_pairs += self.stats.force_pairs;
-        let g = self.gravity;
+        let g = self.uniform_body_force();
+        let frame = &self.frame;
         let p = &mut self.particles;
-        let cs = &p.sound_speed;
+        let (cs, pos, vel) = (&p.sound_speed, &p.pos, &p.vel);
         p.acc
             .par_iter_mut()
             .zip(p.dudt.par_iter_mut())
@@ -310,7 +346,11 @@ impl<const D: usize> System<D> {
             .enumerate()
             .for_each(|(a, ((acc, du), vs))| {
                 let (dv, dudt, vsig) = derivs(a);
-                *acc = dv + g;
+                let body = match frame {
+                    Some(f) => f.body_force(&g, &pos[a], &vel[a]),
+                    None => g,
+                };
+                *acc = dv + body;
                 *du = dudt;
                 *vs = vsig.max(cs[a]);
             });

@@ -86,6 +86,11 @@ motion = { type = "sinusoid", amplitude = [0.01, nan], frequency = 1.0 }"#,
         };
         assert!(err.contains(msg), "{err}");
     }
+    // rpSPH gives no load on a body: refused by name
+    let err = Case::parse(&base.replace("name = \"standard\"", "name = \"rpsph\""))
+        .expect_err("rpsph with a body must fail")
+        .0;
+    assert!(err.contains("scheme.name: \"rpsph\""), "{err}");
 }
 
 #[test]

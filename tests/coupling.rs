@@ -153,6 +153,23 @@ fn save_and_restore_are_exact_with_bodies_driven_from_outside() {
 }
 
 #[test]
+fn save_and_restore_are_exact_in_a_moving_frame_and_with_wall_pair_schemes() {
+    // a closed tank in a frame that sways and rocks (every fictitious term), and the same
+    // tank with Rosswog F1 (wall–wall pairs kept in its lists)
+    let framed = format!(
+        "{}\n[frame]\nmotion = {{ type = \"sinusoid\", amplitude = [0.01, 0.0], angle_amplitude = 0.05, frequency = 1.5 }}\nreference = [0.5, 0.25]\n",
+        model_text("closed-tank2d.toml")
+    );
+    let case = Case::parse(&framed).unwrap();
+    save_restore_is_exact("moving frame", &case, |_, _| {});
+    let case = Case::parse(&model_text("closed-tank2d.toml"))
+        .unwrap()
+        .with_scheme("rosswog-f1")
+        .unwrap();
+    save_restore_is_exact("rosswog-f1 with walls", &case, |_, _| {});
+}
+
+#[test]
 fn a_free_piston_driven_by_a_master_oscillates_at_the_gas_spring_frequency() {
     // The master integrates M ẍ = F − P0 A with symplectic Euler at the communication step
     // and sends position and velocity back (the FMU demo does the same through FMI).

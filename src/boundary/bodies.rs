@@ -74,19 +74,9 @@ impl<const D: usize> Body<D> {
         }
     }
 
-    /// R(θ)·r for the body rotation (2D about z, 3D about `axis`, Rodrigues).
+    /// R(θ)·r for the body rotation (2D about z, 3D about `axis`).
     fn rotate(&self, r: &Vector<D>, theta: f64) -> Vector<D> {
-        if D < 2 || theta == 0.0 {
-            return *r;
-        }
-        let r3 = to3(r);
-        let k = if D == 2 {
-            nalgebra::Vector3::z()
-        } else {
-            self.axis
-        };
-        let (s, c) = theta.sin_cos();
-        from3(&(r3 * c + k.cross(&r3) * s + k * (k.dot(&r3) * (1.0 - c))))
+        super::kinematics::rotate_about(&self.axis, r, theta)
     }
 
     /// Position, velocity and acceleration of the body point that was at `rest` at t = 0.
@@ -109,6 +99,9 @@ impl<const D: usize> System<D> {
     /// Move every body to its pose at time t (prescribed motions; external ones keep the pose
     /// the coupling layer set) and place its wall particles there with the rigid velocity.
     pub fn place_bodies(&mut self, t: f64) {
+        if let Some(f) = &mut self.frame {
+            f.place(t);
+        }
         if self.bodies.is_empty() {
             return;
         }
@@ -136,11 +129,13 @@ impl<const D: usize> System<D> {
     /// Adami et al.'s wall pressure (eq. 27), density (eq. 28) and energy for every wall
     /// particle from its fluid neighbours. Called after the EOS of the fluid.
     pub fn apply_wall_condition(&mut self) {
-        if self.bodies.is_empty() {
+        let n = self.particles.len();
+        // before the first neighbour search (a scheme's init seeding from the EOS) the walls
+        // keep the state they were generated with
+        if self.bodies.is_empty() || self.neighbours.offsets.len() != n + 1 {
             return;
         }
-        let n = self.particles.len();
-        let g = self.gravity;
+        let g = self.uniform_body_force();
         let eos = self.eos;
         let updates: Vec<Option<WallState<D>>> = {
             let p = &self.particles;
@@ -157,6 +152,7 @@ impl<const D: usize> System<D> {
                         return None;
                     }
                     let (_, _, a_w) = bodies[b as usize - 1].point(&p.rest[w]);
+                    let g = self.body_force(&g, &p.pos[w], &p.vel[w]);
                     let (mut sw, mut spw, mut suw) = (0.0, 0.0, 0.0);
                     let (mut srw, mut svw) = (Vector::<D>::zeros(), Vector::<D>::zeros());
                     for &e in nb.of(w) {
@@ -220,7 +216,7 @@ impl<const D: usize> System<D> {
         if self.bodies.is_empty() {
             return;
         }
-        let g = self.gravity;
+        let g = self.uniform_body_force();
         for b in &mut self.bodies {
             b.force = Vector::zeros();
             b.torque = [0.0; 3];
@@ -232,6 +228,10 @@ impl<const D: usize> System<D> {
                 continue;
             }
             let body = &mut self.bodies[b - 1];
+            let g = match &self.frame {
+                Some(f) => f.body_force(&g, &p.pos[i], &p.vel[i]),
+                None => g,
+            };
             let f = (p.acc[i] - g) * p.mass[i];
             p.wall_force[i] = f;
             body.force += f;

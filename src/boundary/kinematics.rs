@@ -30,10 +30,12 @@ pub enum Motion {
         #[serde(default)]
         start: f64,
     },
-    /// Velocity rising linearly from 0 at `start` to `velocity` at `start + ramp_time`, then
-    /// constant.
+    /// Velocity (and angular velocity) rising linearly from 0 at `start` to `velocity` at
+    /// `start + ramp_time`, then constant (ramp_time = 0: a step at `start`).
     Ramp {
         velocity: Vec<f64>,
+        #[serde(default)]
+        angular_velocity: f64,
         ramp_time: f64,
         #[serde(default)]
         start: f64,
@@ -97,6 +99,26 @@ impl<const D: usize> HeldPose<D> {
     }
 }
 
+/// R(θ)·r: rotation by θ about the unit `axis` (Rodrigues; 2D always about z, 1D none).
+pub fn rotate_about<const D: usize>(
+    axis: &nalgebra::Vector3<f64>,
+    r: &crate::particles::Vector<D>,
+    theta: f64,
+) -> crate::particles::Vector<D> {
+    if D < 2 || theta == 0.0 {
+        return *r;
+    }
+    let r3 = nalgebra::Vector3::from_fn(|k, _| if k < D { r[k] } else { 0.0 });
+    let k = if D == 2 {
+        nalgebra::Vector3::z()
+    } else {
+        *axis
+    };
+    let (s, c) = theta.sin_cos();
+    let o = r3 * c + k.cross(&r3) * s + k * (k.dot(&r3) * (1.0 - c));
+    crate::particles::Vector::<D>::from_fn(|i, _| o[i])
+}
+
 fn vector<const D: usize>(v: &[f64]) -> crate::particles::Vector<D> {
     crate::particles::Vector::<D>::from_iterator(v.iter().cloned())
 }
@@ -147,10 +169,12 @@ impl Motion {
             }
             Motion::Ramp {
                 velocity,
+                angular_velocity,
                 ramp_time,
                 start,
             } => {
                 finite_vec("velocity", velocity)?;
+                finite("angular_velocity", *angular_velocity)?;
                 finite("start", *start)?;
                 if !(ramp_time.is_finite() && *ramp_time >= 0.0) {
                     return Err(format!(
@@ -214,6 +238,7 @@ impl Motion {
             }
             Motion::Ramp {
                 velocity,
+                angular_velocity: w,
                 ramp_time,
                 start,
             } => {
@@ -221,13 +246,19 @@ impl Motion {
                 let tau = t - start;
                 if tau > 0.0 {
                     if tau < *ramp_time {
-                        let a = v / *ramp_time;
+                        let (a, al) = (v / *ramp_time, w / ramp_time);
                         p.acceleration = a;
                         p.velocity = a * tau;
                         p.displacement = a * (0.5 * tau * tau);
+                        p.angular_acceleration = al;
+                        p.angular_velocity = al * tau;
+                        p.angle = 0.5 * al * tau * tau;
                     } else {
+                        let moved = 0.5 * ramp_time + (tau - ramp_time);
                         p.velocity = v;
-                        p.displacement = v * (0.5 * ramp_time + (tau - ramp_time));
+                        p.displacement = v * moved;
+                        p.angular_velocity = *w;
+                        p.angle = w * moved;
                     }
                 }
             }
@@ -287,6 +318,7 @@ mod tests {
         fd_check(
             &Motion::Ramp {
                 velocity: vec![1.0, 0.5],
+                angular_velocity: 0.7,
                 ramp_time: 0.2,
                 start: 0.1,
             },
@@ -328,10 +360,20 @@ mod tests {
             (
                 Motion::Ramp {
                     velocity: vec![1.0, 0.0],
+                    angular_velocity: 0.0,
                     ramp_time: -1.0,
                     start: 0.0,
                 },
                 "body[0].motion.ramp_time",
+            ),
+            (
+                Motion::Ramp {
+                    velocity: vec![1.0, 0.0],
+                    angular_velocity: f64::INFINITY,
+                    ramp_time: 1.0,
+                    start: 0.0,
+                },
+                "body[0].motion.angular_velocity",
             ),
             (
                 Motion::Table {

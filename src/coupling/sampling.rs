@@ -94,10 +94,11 @@ pub fn probe<const D: usize>(sys: &System<D>, x: &Vector<D>) -> ProbeValue {
 /// the wall particles (Adami, Hu & Adams 2012, eq. 27): [Σ P_f W + (g − a)·Σ ρ_f r W] / Σ W,
 /// with the body's acceleration a there. 0 where no fluid reaches (a dry marker).
 pub fn marker_pressure<const D: usize>(sys: &System<D>, body: usize, rest: &Vector<D>) -> f64 {
-    let (x, _, a) = sys.bodies[body].point(rest);
+    let (x, v, a) = sys.bodies[body].point(rest);
     let s = sums(sys, &x);
     if s.w <= 0.0 {
         return 0.0;
     }
-    (s.wp + (sys.gravity - a).dot(&s.wr)) / s.w
+    let g = sys.body_force(&sys.uniform_body_force(), &x, &v);
+    (s.wp + (g - a).dot(&s.wr)) / s.w
 }

@@ -135,6 +135,10 @@ pub(super) fn restore<const D: usize>(
         b.motion = now.motion.clone();
     }
     sys.bodies = bodies;
+    // the frame's pose is a function of time only (no external frame motion)
+    if let Some(f) = &mut sys.frame {
+        f.place(saved.time);
+    }
     sys.grid = saved.grid;
     sys.verlet = saved.verlet;
     sys.neighbours = saved.neighbours;

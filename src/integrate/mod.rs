@@ -272,7 +272,9 @@ impl<const D: usize> Integrator<D> {
                 enforce_boundaries(sys);
                 sys.predict_h(0.5 * dt);
                 scheme.refresh(sys);
-                sys.hold_constrained();
+                // a refresh evaluates no forces: the bodies keep the midpoint loads (re-deriving
+                // them from the walls' accelerations would read the rigid motion as a load)
+                sys.particles.hold_frozen();
                 self.saved = s0;
             }
         }

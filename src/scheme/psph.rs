@@ -144,6 +144,9 @@ impl<const D: usize> Scheme<D> for Psph {
 
     fn init(&mut self, sys: &mut System<D>) {
         self.gamma = crate::eos::Eos::gamma(&sys.eos);
+        // wall particles need full neighbourhoods for their pressure sums and f coefficients
+        // (G.7); the force pass skips wall–wall pairs
+        sys.wall_pairs = true;
         let eta_max = sys.kernel.kernel.native_support();
         self.visc = super::crksph::viscosity::ViscosityParams {
             c_l: self.params.c_l.unwrap_or(0.5 * eta_max),
@@ -181,7 +184,7 @@ impl<const D: usize> Scheme<D> for Psph {
                 }
             };
             sys.gather(&mut out, |i, o, pr| {
-                if pr.r <= 0.0 {
+                if pr.r <= 0.0 || sys.wall_pair(i, pr.b) {
                     return;
                 }
                 let j = pr.b;

@@ -357,7 +357,9 @@ pub(crate) fn force_pass<const D: usize>(
             .collect(),
     };
     // Everything the pair term reads of a particle, packed (see System::gather_with).
-    let gravity = sys.gravity;
+    // the δ-SPH hydrostatic correction reads the uniform part (in a rotating frame the
+    // centrifugal and Coriolis parts are left in the diffused density; our decision)
+    let gravity = sys.uniform_body_force();
     let recs: Vec<ForceRecord<D>> = {
         let bal = &p.extra_scalars[balsara_slot];
         let bodies = &sys.bodies;

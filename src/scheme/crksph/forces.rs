@@ -38,6 +38,9 @@ pub fn pressure_acceleration<const D: usize>(
     let mut acc = vec![Vector::<D>::zeros(); p.len()];
     sys.gather(&mut acc, |i, a, pr| {
         let j = pr.b;
+        if sys.wall_pair(i, j) {
+            return;
+        }
         let (w, gw) = kern[pr.index];
         let cj = coef[j].reflected(pr.code);
         *a += pair_force(

@@ -154,6 +154,9 @@ impl<const D: usize> Crksph<D> {
         let p = &sys.particles;
         self.h_next = (0..n)
             .map(|i| {
+                if p.body[i] != 0 {
+                    return p.h[i]; // wall particles keep the h they were generated with
+                }
                 (eta * vol[i].powf(1.0 / D as f64))
                     .clamp(0.8 * p.h[i], 1.25 * p.h[i])
                     .min(h_max)
@@ -176,6 +179,9 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
     }
 
     fn init(&mut self, sys: &mut System<D>) {
+        // wall particles need full neighbourhoods for their volumes (eq 75) and reproducing
+        // coefficients; the force pass skips wall–wall pairs
+        sys.wall_pairs = true;
         self.visc = self
             .params
             .viscosity(sys.kernel.kernel.native_support(), sys.eta);
@@ -207,6 +213,9 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
             let visc = &self.visc;
             sys.gather_pairs(&mut out, &mut work.acc, |i, o, slot, pr| {
                 let j = pr.b;
+                if sys.wall_pair(i, j) {
+                    return; // the slot stays zero: no work between rigid walls
+                }
                 let (w, gw) = kern[pr.index];
                 let cj = coef[j].reflected(pr.code);
                 let (_, gij) = coef[i].corrected(&pr.dx, w, &gw);

@@ -202,6 +202,14 @@ impl Rosswog {
     }
 
     /// X for the current pressures (X = P^k with P floored at a tiny positive value).
+    ///
+    /// Our decision for liquids (the paper's X = P^k, its Eq. 12 family, is written for
+    /// ideal gases): X = (P + P_off)^k with the EOS's offset (`EosConfig::pressure_offset`,
+    /// B for Tait, γP∞ for a stiffened gas), the part of P that behaves like a gas pressure.
+    /// A liquid's P passes through zero at a free surface and sits near it in a tank, where
+    /// P^k would swing by orders of magnitude and the ρ–P loop run away (measured: the closed
+    /// tank's first evaluation diverged to P ~ 1e109); (P + P_off)^k = B^k (ρ/ρ0)^{γk} stays
+    /// smooth. For ideal gases P_off = 0: the paper's X unchanged.
     fn weights<const D: usize>(&self, sys: &System<D>) -> Option<Vec<f64>> {
         let p = &sys.particles;
         match self.params.volume {
@@ -209,29 +217,54 @@ impl Rosswog {
             VolumeElement::One => Some(vec![1.0; p.len()]),
             VolumeElement::Pressure => {
                 let k = self.params.k;
+                let off = sys.eos.pressure_offset();
                 Some(
                     p.pressure
                         .par_iter()
-                        .map(|&pr| pr.max(1e-300).powf(k))
+                        .map(|&pr| (pr + off).max(1e-300).powf(k))
                         .collect(),
                 )
             }
         }
     }
 
-    /// Density, h and pressure; for X = P^k the ρ–P loop of spec §7.2 (steps a–e).
+    /// Density, h and pressure; for X = P^k the ρ–P loop of spec §7.2 (steps a–e): one more
+    /// density pass with the X of the new pressures. Our decision for bodies: in the first
+    /// step the wall particles' X starts from the pressure they were generated with (not yet
+    /// the wall condition's), so the loop repeats until X settles (max relative change
+    /// ≤ 1e-10, at most `FIRST_STEP_PASSES`); afterwards X carries over and two passes suffice.
     fn density<const D: usize>(&self, sys: &mut System<D>) -> Vec<f64> {
+        const FIRST_STEP_PASSES: usize = 30;
         let x = self.weights(sys);
         let again = self.params.volume == VolumeElement::Pressure;
-        solve_density_and_h_weighted(sys, x.as_deref(), !again);
+        // the wall condition reads the working list, so with bodies every pass compacts it
+        let walls = !sys.bodies.is_empty();
+        solve_density_and_h_weighted(sys, x.as_deref(), !again || walls);
         sys.update_eos();
-        if again {
+        if !again {
+            return x.unwrap_or_else(|| sys.particles.mass.clone());
+        }
+        let passes = if self.first_step && walls {
+            FIRST_STEP_PASSES
+        } else {
+            1
+        };
+        let mut prev = x.expect("X = P^k");
+        for _ in 0..passes {
             let x = self.weights(sys).expect("X = P^k");
             solve_density_and_h_weighted(sys, Some(&x), true);
             sys.update_eos();
-            return x;
+            let change = x
+                .iter()
+                .zip(&prev)
+                .map(|(a, b)| ((a - b) / a).abs())
+                .fold(0.0, f64::max);
+            prev = x;
+            if change <= 1e-10 {
+                break;
+            }
         }
-        x.unwrap_or_else(|| sys.particles.mass.clone())
+        prev
     }
 }
 
@@ -284,6 +317,8 @@ impl<const D: usize> Scheme<D> for Rosswog {
     }
 
     fn init(&mut self, sys: &mut System<D>) {
+        // wall particles need full neighbourhoods for their IA matrices (Eq. 17)
+        sys.wall_pairs = true;
         self.prev_div_slot = sys.particles.add_scalar_field(0.0);
         // Pressures of the initial condition seed X = P^k.
         sys.update_eos();
@@ -347,7 +382,7 @@ impl<const D: usize> Scheme<D> for Rosswog {
             |i| (recs[i].x, recs[i].v),
             &mut out,
             |a, o, pr| {
-                if pr.r <= 0.0 {
+                if pr.r <= 0.0 || sys.wall_pair(a, pr.b) {
                     return;
                 }
                 let (ra, rb) = (&recs[a], &recs[pr.b]);
@@ -398,10 +433,9 @@ impl<const D: usize> Scheme<D> for Rosswog {
     }
 
     fn end_step(&mut self, sys: &mut System<D>, dt: f64) {
-        if !self.params.triggers {
-            return;
+        if self.params.triggers {
+            triggers::update(sys, &self.params, self.prev_div_slot, dt, self.first_step);
         }
-        triggers::update(sys, &self.params, self.prev_div_slot, dt, self.first_step);
         self.first_step = false;
     }
 

@@ -1,0 +1,127 @@
+//! The body-fixed (non-inertial) frame of a case (issue 5, `[frame]`): instead of moving a
+//! tank's walls through the box, the whole computation stays in the tank's frame, which moves
+//! with a prescribed motion (translation d(t) of its reference point, rotation θ(t) about
+//! `axis`, 2D: about z). Every particle then feels, besides the inertial gravity g, the
+//! fictitious accelerations of a frame with origin acceleration A = d̈ and angular velocity
+//! Ω = θ̇ k (e.g. Landau & Lifshitz, Mechanics §39):
+//!
+//!   a = −∇P/ρ + Rᵀ(g − A) − Ω̇ × r − 2 Ω × v − Ω × (Ω × r),
+//!
+//! with r = x − reference and v the velocity in the frame, and Rᵀ turning inertial vectors
+//! into frame coordinates. Positions, velocities, forces and torques on bodies are all
+//! reported in frame coordinates. The wall condition's hydrostatic term (Adami et al. 2012,
+//! eq. 27) uses the same effective body force at the wall particle.
+
+use super::kinematics::{rotate_about, Motion, Pose};
+use crate::particles::Vector;
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+/// `[frame]` of a case file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrameConfig {
+    /// The frame's motion (fixed, sinusoid, ramp or table; not external).
+    pub motion: Motion,
+    /// Point the rotation is about, in frame coordinates (default: the origin).
+    #[serde(default)]
+    pub reference: Option<Vec<f64>>,
+    /// Rotation axis (3D; default z). 2D frames rotate about z.
+    #[serde(default)]
+    pub axis: Option<Vec<f64>>,
+}
+
+impl FrameConfig {
+    pub fn validate(&self, dim: usize) -> Result<(), String> {
+        if matches!(self.motion, Motion::External) {
+            return Err(
+                "frame.motion: \"external\" is not available for the frame; use a moving body with motion = { type = \"external\" }".into(),
+            );
+        }
+        if let Motion::Table { .. } = self.motion {
+            return Err(
+                "frame.motion: a table is piecewise linear, so its acceleration (the frame force) is zero between entries; use a sinusoid or ramp".into(),
+            );
+        }
+        self.motion.validate("frame.motion", dim)?;
+        if let Some(r) = &self.reference {
+            if r.len() != dim || r.iter().any(|x| !x.is_finite()) {
+                return Err(format!(
+                    "frame.reference: must have {dim} finite entries (case.dimension), got {r:?}"
+                ));
+            }
+        }
+        if let Some(a) = &self.axis {
+            if dim != 3 {
+                return Err(format!(
+                    "frame.axis: only in 3D (a {dim}D frame rotates about z)"
+                ));
+            }
+            let n = a.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if a.len() != 3 || !(n.is_finite() && n > 0.0) {
+                return Err(format!(
+                    "frame.axis: must be 3 finite entries, not all zero, got {a:?}"
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    pub fn build<const D: usize>(&self) -> Frame<D> {
+        let axis = match &self.axis {
+            Some(a) => Vector3::new(a[0], a[1], a[2]).normalize(),
+            None => Vector3::z(),
+        };
+        Frame {
+            motion: self.motion.clone(),
+            reference: self
+                .reference
+                .as_ref()
+                .map(|r| Vector::<D>::from_iterator(r.iter().cloned()))
+                .unwrap_or_else(Vector::<D>::zeros),
+            axis,
+            pose: Pose::default(),
+        }
+    }
+}
+
+/// The frame at run time: its motion and the pose at the current time.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Frame<const D: usize> {
+    /// From the case, so not part of a saved state (`coupling::state` puts it back).
+    #[serde(skip)]
+    pub motion: Motion,
+    pub reference: Vector<D>,
+    pub axis: Vector3<f64>,
+    pub pose: Pose<D>,
+}
+
+fn to3<const D: usize>(v: &Vector<D>) -> Vector3<f64> {
+    Vector3::from_fn(|k, _| if k < D { v[k] } else { 0.0 })
+}
+
+impl<const D: usize> Frame<D> {
+    /// The frame's pose at time t.
+    pub fn place(&mut self, t: f64) {
+        self.pose = self.motion.pose::<D>(t);
+    }
+
+    /// The uniform part of the body force in frame coordinates, Rᵀ(g − A).
+    pub fn uniform(&self, g: &Vector<D>) -> Vector<D> {
+        rotate_about(&self.axis, &(g - self.pose.acceleration), -self.pose.angle)
+    }
+
+    /// Body force per unit mass at frame position x moving at frame velocity v: the uniform
+    /// part and the Euler, Coriolis and centrifugal terms (module docs).
+    pub fn body_force(&self, uniform: &Vector<D>, x: &Vector<D>, v: &Vector<D>) -> Vector<D> {
+        let p = &self.pose;
+        if p.angular_velocity == 0.0 && p.angular_acceleration == 0.0 {
+            return *uniform;
+        }
+        let r = to3(&(x - self.reference));
+        let w = self.axis * p.angular_velocity;
+        let wdot = self.axis * p.angular_acceleration;
+        let f = -wdot.cross(&r) - 2.0 * w.cross(&to3(v)) - w.cross(&w.cross(&r));
+        uniform + Vector::<D>::from_fn(|k, _| f[k])
+    }
+}
