@@ -227,10 +227,7 @@ impl<const D: usize> System<D> {
     /// [`Self::uniform_body_force`], computed once per pass.
     #[inline]
     pub fn body_force(&self, uniform: &Vector<D>, x: &Vector<D>, v: &Vector<D>) -> Vector<D> {
-        match &self.frame {
-            Some(f) => f.body_force(uniform, x, v),
-            None => *uniform,
-        }
+        crate::boundary::frame::body_force_in(self.frame.as_ref(), uniform, x, v)
     }
 
     /// Both particles of the pair belong to bodies: rigid walls exert no force on each other
@@ -336,7 +333,7 @@ impl<const D: usize> System<D> {
         self.stats.force_pairs = self.neighbours.total_pairs() as u64;
         self.stats.total_pairs += self.stats.force_pairs;
         let g = self.uniform_body_force();
-        let frame = &self.frame;
+        let frame = self.frame.as_ref();
         let p = &mut self.particles;
         let (cs, pos, vel) = (&p.sound_speed, &p.pos, &p.vel);
         p.acc
@@ -346,11 +343,7 @@ impl<const D: usize> System<D> {
             .enumerate()
             .for_each(|(a, ((acc, du), vs))| {
                 let (dv, dudt, vsig) = derivs(a);
-                let body = match frame {
-                    Some(f) => f.body_force(&g, &pos[a], &vel[a]),
-                    None => g,
-                };
-                *acc = dv + body;
+                *acc = dv + crate::boundary::frame::body_force_in(frame, &g, &pos[a], &vel[a]);
                 *du = dudt;
                 *vs = vsig.max(cs[a]);
             });

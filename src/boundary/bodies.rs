@@ -228,10 +228,7 @@ impl<const D: usize> System<D> {
                 continue;
             }
             let body = &mut self.bodies[b - 1];
-            let g = match &self.frame {
-                Some(f) => f.body_force(&g, &p.pos[i], &p.vel[i]),
-                None => g,
-            };
+            let g = super::frame::body_force_in(self.frame.as_ref(), &g, &p.pos[i], &p.vel[i]);
             let f = (p.acc[i] - g) * p.mass[i];
             p.wall_force[i] = f;
             body.force += f;

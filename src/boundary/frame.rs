@@ -96,6 +96,21 @@ pub struct Frame<const D: usize> {
     pub pose: Pose<D>,
 }
 
+/// Body force per unit mass at x moving at v: `uniform` without a frame, else the frame's
+/// [`Frame::body_force`]. A free function for passes that hold the particles mutably.
+#[inline]
+pub fn body_force_in<const D: usize>(
+    frame: Option<&Frame<D>>,
+    uniform: &Vector<D>,
+    x: &Vector<D>,
+    v: &Vector<D>,
+) -> Vector<D> {
+    match frame {
+        Some(f) => f.body_force(uniform, x, v),
+        None => *uniform,
+    }
+}
+
 fn to3<const D: usize>(v: &Vector<D>) -> Vector3<f64> {
     Vector3::from_fn(|k, _| if k < D { v[k] } else { 0.0 })
 }
