@@ -29,6 +29,10 @@ pub struct Particles<const D: usize> {
     /// 0 for fluid; b + 1 for a wall particle of body b (moved by the body's kinematics, its
     /// pressure from the wall condition, see `boundary::bodies`).
     pub body: Vec<u16>,
+    /// 0 for fluid and walls; k + 1 for a buffer particle of port k (`boundary::ports`): it
+    /// takes part in every sum like fluid, but its state is set by the port condition.
+    #[serde(default)]
+    pub port: Vec<u16>,
     /// Position at t = 0 (wall particles: their place in the body frame).
     pub rest: Vec<Vector<D>>,
     /// dv/dt from the latest evaluation.
@@ -49,7 +53,8 @@ pub struct Particles<const D: usize> {
     /// The velocity a wall particle shows in the laminar viscous term: 2 v_w − v̂_f for a
     /// no-slip body (Adami, Hu & Adams 2012, eqs. 22–23: the fluid velocity extrapolated
     /// through the wall so that it vanishes relative to the wall on the surface), else v_w.
-    /// Unused for fluid particles.
+    /// For a port buffer particle: the velocity the port condition gave it. Unused for fluid
+    /// particles.
     pub vel_wall: Vec<Vector<D>>,
     /// Force of the fluid on a wall particle from the latest evaluation, m_w (a_w − g) before
     /// the wall is given its rigid motion (patches sum it). Zero for fluid particles.
@@ -82,6 +87,7 @@ impl<const D: usize> Particles<D> {
         self.id.push(id);
         self.frozen.push(false);
         self.body.push(0);
+        self.port.push(0);
         self.rest.push(x);
         self.acc.push(Vector::zeros());
         self.dudt.push(0.0);
@@ -113,7 +119,8 @@ impl<const D: usize> Particles<D> {
         self.extra_vectors.len() - 1
     }
 
-    /// Reorder every per-particle array so that new index i holds old index `perm[i]`.
+    /// Reorder every per-particle array so that new index i holds old index `perm[i]`. `perm`
+    /// may also repeat or leave out indices (the ports create and delete particles this way).
     pub fn permute(&mut self, perm: &[u32]) {
         fn ap<T: Copy>(v: &mut Vec<T>, perm: &[u32]) {
             let out: Vec<T> = perm.iter().map(|&i| v[i as usize]).collect();
@@ -131,6 +138,7 @@ impl<const D: usize> Particles<D> {
         ap(&mut self.id, perm);
         ap(&mut self.frozen, perm);
         ap(&mut self.body, perm);
+        ap(&mut self.port, perm);
         ap(&mut self.rest, perm);
         ap(&mut self.acc, perm);
         ap(&mut self.dudt, perm);

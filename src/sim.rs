@@ -82,7 +82,11 @@ pub struct Diagnostics {
     pub time: f64,
     pub step: u64,
     pub dt: f64,
+    /// All particles: fluid, walls and port buffers.
     pub particles: usize,
+    /// Fluid particles (neither wall nor port buffer): ports create and delete particles.
+    pub fluid_particles: usize,
+    /// Fluid mass (walls and port buffers excluded).
     pub mass: f64,
     pub momentum: [f64; 3],
     pub angular_momentum: [f64; 3],
@@ -195,6 +199,8 @@ impl<const D: usize> Simulation<D> {
         if self.reorder_every > 0 && self.steps > 0 && self.steps % self.reorder_every == 0 {
             self.reorder();
         }
+        // the evaluations inside the step see its end time (port pressures)
+        self.sys.time = self.time + dt;
         self.integrator
             .step(&mut self.sys, self.scheme.as_mut(), dt)
             .map_err(|e| SolverError::Scheme {
@@ -206,6 +212,9 @@ impl<const D: usize> Simulation<D> {
         self.time += dt;
         // walls land exactly on their body's pose (the integrator moved them approximately)
         self.sys.place_bodies(self.time);
+        self.sys.time = self.time;
+        // particles cross the port openings: fluid in, fluid out, buffers refilled
+        self.sys.exchange_port_particles();
         self.steps += 1;
         if dt < dt_cap || self.last_dt == 0.0 {
             self.last_dt = dt;
@@ -242,6 +251,7 @@ impl<const D: usize> Simulation<D> {
     /// or the pose of an externally driven body, whose walls are placed first).
     pub fn reevaluate(&mut self) -> Result<(), SolverError> {
         self.sys.place_bodies(self.time);
+        self.sys.time = self.time;
         self.scheme
             .evaluate(&mut self.sys)
             .map_err(|e| SolverError::Scheme {
@@ -271,10 +281,12 @@ impl<const D: usize> Simulation<D> {
             ..Default::default()
         };
         for a in 0..p.len() {
-            // the fluid only: wall particles belong to bodies, whose loads are reported apart
-            if p.body[a] != 0 {
+            // the fluid only: wall particles belong to bodies, whose loads are reported apart,
+            // and port buffers are outside the domain
+            if p.body[a] != 0 || p.port[a] != 0 {
                 continue;
             }
+            d.fluid_particles += 1;
             let m = p.mass[a];
             let v = p.vel[a];
             let x = p.pos[a];

@@ -84,6 +84,11 @@ pub struct System<const D: usize> {
     /// The non-inertial frame the computation runs in (`[frame]`), if any: every particle
     /// then feels its fictitious accelerations besides `gravity` (see `boundary::frame`).
     pub frame: Option<crate::boundary::frame::Frame<D>>,
+    /// Pressure ports (openings with particle buffers, `boundary::ports`).
+    pub ports: Vec<crate::boundary::ports::Port<D>>,
+    /// Time of the state the next evaluation sees (set by the driver: the end of the step
+    /// being taken), for time-dependent boundary values (port pressures).
+    pub time: f64,
 }
 
 /// A neighbour list with a skin, the positions and radii it was built for.
@@ -198,6 +203,18 @@ impl<const D: usize> System<D> {
             };
         }
         self.neighbours = NeighbourList::default();
+    }
+
+    /// Forget the neighbour lists (after particles were created or deleted): the next
+    /// evaluation builds them anew.
+    pub fn reset_neighbours(&mut self) {
+        self.verlet = VerletList {
+            builds: self.verlet.builds,
+            ..Default::default()
+        };
+        self.neighbours = NeighbourList::default();
+        // its cell order is the reorder permutation: stale once the count changed
+        self.grid = CellGrid::default();
     }
 
     /// Scale every h by the expected compression over `dt` (continuity equation,
@@ -353,10 +370,12 @@ impl<const D: usize> System<D> {
     /// load and take its rigid motion.
     pub fn hold_constrained(&mut self) {
         self.particles.hold_frozen();
+        self.hold_ports();
         self.hold_walls();
     }
 
-    /// P and c_s from the EOS for every particle, then the wall condition on wall particles.
+    /// P and c_s from the EOS for every particle, then the port condition on buffer particles
+    /// and the wall condition on wall particles.
     pub fn update_eos(&mut self) {
         let eos = self.eos;
         let p = &mut self.particles;
@@ -368,6 +387,12 @@ impl<const D: usize> System<D> {
                 *pr = eos.pressure(rho, u);
                 *cs = eos.sound_speed(rho, u);
             });
+        self.apply_boundary_conditions();
+    }
+
+    /// The port condition, then the wall condition (which sees buffer particles as fluid).
+    pub fn apply_boundary_conditions(&mut self) {
+        self.apply_port_condition(self.time);
         self.apply_wall_condition();
     }
 

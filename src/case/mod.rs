@@ -4,6 +4,7 @@
 mod bodies;
 mod checks;
 mod glass;
+mod ports;
 mod ics;
 mod probes;
 
@@ -12,6 +13,7 @@ pub use probes::{MarkerConfig, PatchConfig, ProbeConfig};
 pub use bodies::BodyConfig;
 pub use checks::{Blast, Verify};
 pub use glass::GlassConfig;
+pub use ports::{OpeningConfig, PortConfig};
 pub use ics::generate_particles;
 
 use crate::domain::{BoundaryKind, Domain};
@@ -88,6 +90,9 @@ pub struct Case {
     /// Run in a moving (non-inertial) frame, e.g. a tank's: see `boundary::frame`.
     #[serde(default)]
     pub frame: Option<crate::boundary::frame::FrameConfig>,
+    /// Openings in bodies where an outside model sets the pressure (`boundary::ports`).
+    #[serde(default, rename = "port")]
+    pub ports: Vec<PortConfig>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -505,6 +510,9 @@ impl Case {
         for (i, b) in self.bodies.iter().enumerate() {
             b.validate(i, self)?;
         }
+        for (i, p) in self.ports.iter().enumerate() {
+            p.validate(i, self)?;
+        }
         if let Some(f) = &self.frame {
             f.validate(self.dimension()).map_err(CaseError)?;
         }
@@ -722,7 +730,8 @@ impl Case {
         let domain = Domain { lo, hi, kind };
         let eta = self.eta()?;
         let kernel = DimKernel::<D>::new(self.kernel()?);
-        let (particles, bodies) = generate_particles::<D>(self, &domain, eta)?;
+        let (mut particles, bodies) = generate_particles::<D>(self, &domain, eta)?;
+        let ports = ports::add_ports(self, &mut particles, &bodies)?;
         let extent = (0..D).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
         let h_max = self.kernel.h_max.unwrap_or(0.25 * extent);
         // Minimum image needs the search radius below half of every periodic side.
@@ -769,6 +778,8 @@ impl Case {
             evolve_density: false,
             wall_pairs: false,
             frame: self.frame.as_ref().map(|f| f.build::<D>()),
+            ports,
+            time: 0.0,
         })
     }
 }

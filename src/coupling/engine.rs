@@ -3,7 +3,7 @@
 
 use super::{
     sampling, state, BodyKinematics, BodyLoads, CouplingError, PatchMembers, PatchValue,
-    ProbeValue, StepReport,
+    PortValue, ProbeValue, StepReport,
 };
 use crate::boundary::geometry::Shape;
 use crate::boundary::kinematics::{HeldPose, Pose};
@@ -19,6 +19,8 @@ pub(super) trait Engine: Send + Sync {
     fn set_body(&mut self, b: usize, k: &BodyKinematics);
     fn advance_to(&mut self, t: f64) -> Result<StepReport, SolverError>;
     fn loads(&self) -> Vec<BodyLoads>;
+    fn set_port_pressure(&mut self, k: usize, p: f64);
+    fn ports(&self) -> Vec<PortValue>;
     fn probes(&self, points: &[[f64; 3]]) -> Vec<ProbeValue>;
     fn markers(&self, markers: &[(usize, [f64; 3])]) -> Vec<f64>;
     fn patch_members(&self, specs: &[PatchSpec]) -> Vec<PatchMembers>;
@@ -155,6 +157,21 @@ impl<const D: usize> Engine for Coupled<D> {
             .collect()
     }
 
+    fn set_port_pressure(&mut self, k: usize, p: f64) {
+        let port = &mut self.sim.sys.ports[k];
+        if port.external != p {
+            port.external = p;
+            self.dirty = true;
+        }
+    }
+
+    fn ports(&self) -> Vec<PortValue> {
+        let sys = &self.sim.sys;
+        (0..sys.ports.len())
+            .map(|k| sampling::port_value(sys, k))
+            .collect()
+    }
+
     fn probes(&self, points: &[[f64; 3]]) -> Vec<ProbeValue> {
         points
             .iter()
@@ -199,8 +216,10 @@ impl<const D: usize> Engine for Coupled<D> {
 
     fn patches(&self, members: &[PatchMembers]) -> Vec<PatchValue> {
         let p = &self.sim.sys.particles;
-        // stable id → current index (particles are reordered for locality)
-        let mut index = vec![0usize; p.len()];
+        // stable id → current index (particles are reordered for locality; ports create
+        // particles with ids beyond the count)
+        let ids = p.id.iter().copied().max().map_or(0, |m| m as usize + 1);
+        let mut index = vec![0usize; ids];
         for (i, &id) in p.id.iter().enumerate() {
             index[id as usize] = i;
         }

@@ -143,6 +143,23 @@ pub struct PatchValue {
     pub force: [f64; 3],
 }
 
+/// Flow through a `[[port]]`, sampled on its opening (Shepard interpolation over fluid and
+/// buffer at one point per buffer lattice cell): the port pressure in force now, the mean
+/// pressure the fluid shows on the opening, the mean velocity along the port normal (into the
+/// fluid: positive = inflow), volume and mass flow into the fluid (2D: per metre of depth),
+/// and the exact fluid mass that entered and left through the port since t = 0 (particles
+/// counted as they cross, so fluid mass = initial + Σ in − Σ out to round-off).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PortValue {
+    pub pressure: f64,
+    pub mean_pressure: f64,
+    pub velocity: f64,
+    pub volume_flow: f64,
+    pub mass_flow: f64,
+    pub mass_in: f64,
+    pub mass_out: f64,
+}
+
 /// Which wall particles (stable ids) make up a patch.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct PatchMembers {
@@ -328,6 +345,58 @@ impl Coupling {
     /// Force and torque on every body, in case order.
     pub fn loads(&self) -> Vec<BodyLoads> {
         self.engine.loads()
+    }
+
+    pub fn port_names(&self) -> Vec<&str> {
+        self.case.ports.iter().map(|p| p.name.as_str()).collect()
+    }
+
+    /// Index of the port called `name`.
+    pub fn port_index(&self, name: &str) -> Result<usize, CouplingError> {
+        self.case
+            .ports
+            .iter()
+            .position(|p| p.name == name)
+            .ok_or_else(|| {
+                CouplingError(format!(
+                    "port: no port named {name:?} (ports: {:?})",
+                    self.port_names()
+                ))
+            })
+    }
+
+    /// Pressure of port `port` from now on (its pressure must be `external`): finite and
+    /// ≥ 0 (the solver's gauge: 0 at the EOS reference density). A rejected value changes
+    /// nothing.
+    pub fn set_port_pressure(&mut self, port: usize, pressure: f64) -> Result<(), CouplingError> {
+        let cfg = self.case.ports.get(port).ok_or_else(|| {
+            CouplingError(format!(
+                "port: index {port} out of range (the case has {} ports)",
+                self.case.ports.len()
+            ))
+        })?;
+        if !matches!(
+            cfg.pressure,
+            crate::boundary::ports::PortPressure::External { .. }
+        ) {
+            return Err(CouplingError(format!(
+                "port {:?}: its pressure is prescribed by the case; set pressure = {{ type = \"external\" }} to drive it from outside",
+                cfg.name
+            )));
+        }
+        if !(pressure.is_finite() && pressure >= 0.0) {
+            return Err(CouplingError(format!(
+                "port {:?} pressure: must be a finite number ≥ 0, got {pressure}",
+                cfg.name
+            )));
+        }
+        self.engine.set_port_pressure(port, pressure);
+        Ok(())
+    }
+
+    /// Flow and pressure at every `[[port]]`, in case order.
+    pub fn ports(&self) -> Vec<PortValue> {
+        self.pool.install(|| self.engine.ports())
     }
 
     /// Values at every `[[probe]]`, in case order.

@@ -1,7 +1,7 @@
 //! Probe and marker values from the particles (brute force over the fluid: a handful of
 //! points per communication step costs one pass over the particles each).
 
-use super::ProbeValue;
+use super::{PortValue, ProbeValue};
 use crate::particles::Vector;
 use crate::system::System;
 use rayon::prelude::*;
@@ -101,4 +101,29 @@ pub fn marker_pressure<const D: usize>(sys: &System<D>, body: usize, rest: &Vect
     }
     let g = sys.body_force(&sys.uniform_body_force(), &x, &v);
     (s.wp + (g - a).dot(&s.wr)) / s.w
+}
+
+/// Flow through port k: the probe values at its sample points on the opening, averaged
+/// (see [`PortValue`]).
+pub fn port_value<const D: usize>(sys: &System<D>, k: usize) -> PortValue {
+    let port = &sys.ports[k];
+    let n = port.samples.len().max(1) as f64;
+    let (mut pm, mut vn, mut flux) = (0.0, 0.0, 0.0);
+    for x in &port.samples {
+        let s = probe(sys, x);
+        let v = Vector::<D>::from_fn(|a, _| s.velocity[a]).dot(&port.normal);
+        pm += s.pressure;
+        vn += v;
+        flux += s.density * v;
+    }
+    let area = port.opening.area();
+    PortValue {
+        pressure: port.pressure_at(sys.time),
+        mean_pressure: pm / n,
+        velocity: vn / n,
+        volume_flow: vn / n * area,
+        mass_flow: flux / n * area,
+        mass_in: port.mass_in,
+        mass_out: port.mass_out,
+    }
 }

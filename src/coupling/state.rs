@@ -1,7 +1,7 @@
 //! Save / restore of the whole solver state (FMI get/set and serialize FMU state).
 //!
 //! Saved: everything a continued run reads — the particles (all fields, the scheme's extra
-//! slots), the bodies, gravity, the cell grid and neighbour lists (their order sets the
+//! slots), the bodies, the ports (their mass counters and last external pressure), gravity, the cell grid and neighbour lists (their order sets the
 //! summation order, so they must come back as they were for a bit-exact continuation), the
 //! integrator's saved stage state, time, step count, last dt and the pending-input flag.
 //! Not saved: what the case fixes (box, kernel, EOS, scheme parameters, step control); the
@@ -14,6 +14,7 @@
 
 use super::engine::Coupled;
 use crate::boundary::bodies::Body;
+use crate::boundary::ports::Port;
 use crate::case::Case;
 use crate::integrate::Integrator;
 use crate::neighbours::{CellGrid, NeighbourList};
@@ -22,7 +23,7 @@ use crate::system::{EvalStats, VerletList};
 use serde::{Deserialize, Serialize};
 
 const MAGIC: [u8; 8] = *b"sphfmu\0s";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 
 #[derive(Serialize, Deserialize)]
 struct Header {
@@ -42,6 +43,7 @@ struct Saved<const D: usize> {
     gravity: Vector<D>,
     particles: Particles<D>,
     bodies: Vec<Body<D>>,
+    ports: Vec<Port<D>>,
     grid: CellGrid<D>,
     verlet: VerletList<D>,
     neighbours: NeighbourList,
@@ -77,6 +79,7 @@ pub(super) fn save<const D: usize>(c: &Coupled<D>, fingerprint: u64) -> Vec<u8> 
         gravity: sys.gravity,
         particles: sys.particles.clone(),
         bodies: sys.bodies.clone(),
+        ports: sys.ports.clone(),
         grid: sys.grid.clone(),
         verlet: sys.verlet.clone(),
         neighbours: sys.neighbours.clone(),
@@ -115,6 +118,7 @@ pub(super) fn restore<const D: usize>(
         postcard::from_bytes(rest).map_err(|e| format!("state: damaged ({e})"))?;
     if saved.particles.len() as u64 != header.particles
         || saved.bodies.len() != c.sim.sys.bodies.len()
+        || saved.ports.len() != c.sim.sys.ports.len()
     {
         return Err("state: damaged (particle or body count does not match its header)".into());
     }
@@ -135,6 +139,8 @@ pub(super) fn restore<const D: usize>(
         b.motion = now.motion.clone();
     }
     sys.bodies = bodies;
+    sys.ports = saved.ports;
+    sys.time = saved.time;
     // the frame's pose is a function of time only (no external frame motion)
     if let Some(f) = &mut sys.frame {
         f.place(saved.time);

@@ -133,7 +133,7 @@ impl Psph {
         }
         sys.stats.total_pairs += sys.neighbours.total_pairs() as u64;
         sys.stats.seconds_density += t0.elapsed().as_secs_f64();
-        sys.apply_wall_condition();
+        sys.apply_boundary_conditions();
     }
 }
 

@@ -124,7 +124,8 @@ fn solve_one<const D: usize>(sys: &System<D>, x: &[f64], a: usize, h_reach: f64)
     let h_cap = h_reach.min(sys.h_max);
     let mut h = sys.particles.h[a].min(h_cap);
     let mut it = 0;
-    // wall particles keep their h (their density comes from the wall condition)
+    // wall and port-buffer particles keep their h (their density comes from the wall or port
+    // condition; a buffer's back rows would otherwise grow h into the empty space behind)
     let mut lo = 0.0_f64;
     let mut hi = f64::INFINITY;
     let finish =
@@ -136,7 +137,7 @@ fn solve_one<const D: usize>(sys: &System<D>, x: &[f64], a: usize, h_reach: f64)
             needs_rebuild,
             capped,
         };
-    if sys.particles.body[a] != 0 {
+    if sys.particles.body[a] != 0 || sys.particles.port[a] != 0 {
         let h0 = sys.particles.h[a];
         let (kappa, dkappa) = kappa_at(sys, x, a, h);
         return finish(h, kappa, dkappa, 1, h0 > h_cap && h_cap < sys.h_max, false);

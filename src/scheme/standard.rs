@@ -261,7 +261,7 @@ fn continuity_state<const D: usize>(sys: &mut System<D>) {
     let (eta, h_max) = (sys.eta, sys.h_max);
     let p = &mut sys.particles;
     for i in 0..p.len() {
-        if p.body[i] == 0 {
+        if p.body[i] == 0 && p.port[i] == 0 {
             p.h[i] = (eta * (p.mass[i] / p.rho[i]).powf(1.0 / D as f64)).min(h_max);
         }
         p.omega[i] = 1.0;

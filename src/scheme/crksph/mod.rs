@@ -154,8 +154,8 @@ impl<const D: usize> Crksph<D> {
         let p = &sys.particles;
         self.h_next = (0..n)
             .map(|i| {
-                if p.body[i] != 0 {
-                    return p.h[i]; // wall particles keep the h they were generated with
+                if p.body[i] != 0 || p.port[i] != 0 {
+                    return p.h[i]; // wall and buffer particles keep the h they were given
                 }
                 (eta * vol[i].powf(1.0 / D as f64))
                     .clamp(0.8 * p.h[i], 1.25 * p.h[i])
