@@ -63,12 +63,21 @@ pub enum PortPressure {
         duration: f64,
     },
     /// Values at increasing times, linear in between, held outside.
-    Table { time: Vec<f64>, value: Vec<f64> },
+    Table {
+        time: Vec<f64>,
+        value: Vec<f64>,
+    },
     /// Set by the master through the Coupling API (`initial` until the first set).
     External {
         #[serde(default)]
         initial: f64,
     },
+}
+
+impl Default for PortPressure {
+    fn default() -> Self {
+        PortPressure::Constant { value: 0.0 }
+    }
 }
 
 impl PortPressure {
@@ -228,6 +237,9 @@ impl<const D: usize> Opening<D> {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Port<const D: usize> {
     pub name: String,
+    /// From the case, so not part of a saved state (`coupling::state` puts it back; postcard
+    /// cannot carry an internally tagged enum either).
+    #[serde(skip)]
     pub pressure: PortPressure,
     /// The value the master set last (`PortPressure::External`).
     pub external: f64,
@@ -291,9 +303,7 @@ impl<const D: usize> System<D> {
                 .filter(|&f| p.body[f] == 0 && p.port[f] == 0)
                 .filter(|&f| {
                     let (d, t) = port.split(&p.pos[f]);
-                    d > -reach
-                        && d < port.depth + reach
-                        && t.norm() <= port.opening.reach() + reach
+                    d > -reach && d < port.depth + reach && t.norm() <= port.opening.reach() + reach
                 })
                 .collect();
             let p_port = port.pressure_at(t);

@@ -4,8 +4,8 @@
 mod bodies;
 mod checks;
 mod glass;
-mod ports;
 mod ics;
+mod ports;
 mod probes;
 
 pub use probes::{MarkerConfig, PatchConfig, ProbeConfig};
@@ -13,8 +13,8 @@ pub use probes::{MarkerConfig, PatchConfig, ProbeConfig};
 pub use bodies::BodyConfig;
 pub use checks::{Blast, Verify};
 pub use glass::GlassConfig;
-pub use ports::{OpeningConfig, PortConfig};
 pub use ics::generate_particles;
+pub use ports::{OpeningConfig, PortConfig};
 
 use crate::domain::{BoundaryKind, Domain};
 use crate::eos::EosConfig;

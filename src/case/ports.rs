@@ -265,7 +265,15 @@ pub(super) fn add_ports<const D: usize>(
             .collect::<Vec<_>>();
         for i in last {
             let x = p.pos[i] - n * dx;
-            p.push(p.mass[i], x, Vector::zeros(), p.u[i], p.rho[i], p.h[i], fluid_material);
+            p.push(
+                p.mass[i],
+                x,
+                Vector::zeros(),
+                p.u[i],
+                p.rho[i],
+                p.h[i],
+                fluid_material,
+            );
             let j = p.len() - 1;
             p.port[j] = tag;
             p.pressure[j] = p.pressure[i];

@@ -2,8 +2,8 @@
 //! so `Coupling` itself is not generic.
 
 use super::{
-    sampling, state, BodyKinematics, BodyLoads, CouplingError, PatchMembers, PatchValue,
-    PortValue, ProbeValue, StepReport,
+    sampling, state, BodyKinematics, BodyLoads, CouplingError, ParticleKind, ParticleState,
+    PatchMembers, PatchValue, PortValue, ProbeValue, StepReport,
 };
 use crate::boundary::geometry::Shape;
 use crate::boundary::kinematics::{HeldPose, Pose};
@@ -21,6 +21,7 @@ pub(super) trait Engine: Send + Sync {
     fn loads(&self) -> Vec<BodyLoads>;
     fn set_port_pressure(&mut self, k: usize, p: f64);
     fn ports(&self) -> Vec<PortValue>;
+    fn particles(&self, stride: usize) -> Vec<ParticleState>;
     fn probes(&self, points: &[[f64; 3]]) -> Vec<ProbeValue>;
     fn markers(&self, markers: &[(usize, [f64; 3])]) -> Vec<f64>;
     fn patch_members(&self, specs: &[PatchSpec]) -> Vec<PatchMembers>;
@@ -169,6 +170,24 @@ impl<const D: usize> Engine for Coupled<D> {
         let sys = &self.sim.sys;
         (0..sys.ports.len())
             .map(|k| sampling::port_value(sys, k))
+            .collect()
+    }
+
+    fn particles(&self, stride: usize) -> Vec<ParticleState> {
+        let p = &self.sim.sys.particles;
+        (0..p.len())
+            .step_by(stride)
+            .map(|i| ParticleState {
+                kind: match (p.body[i], p.port[i]) {
+                    (0, 0) => ParticleKind::Fluid,
+                    (0, k) => ParticleKind::Buffer(k as usize - 1),
+                    (b, _) => ParticleKind::Wall(b as usize - 1),
+                },
+                position: array(&p.pos[i]),
+                velocity: array(&p.vel[i]),
+                density: p.rho[i],
+                pressure: p.pressure[i],
+            })
             .collect()
     }
 

@@ -160,6 +160,24 @@ pub struct PortValue {
     pub mass_out: f64,
 }
 
+/// What a particle is: fluid, a wall particle of body b, or a buffer particle of port k.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ParticleKind {
+    Fluid,
+    Wall(usize),
+    Buffer(usize),
+}
+
+/// One particle's state (entries beyond the dimension are 0).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParticleState {
+    pub kind: ParticleKind,
+    pub position: [f64; 3],
+    pub velocity: [f64; 3],
+    pub density: f64,
+    pub pressure: f64,
+}
+
 /// Which wall particles (stable ids) make up a patch.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct PatchMembers {
@@ -397,6 +415,11 @@ impl Coupling {
     /// Flow and pressure at every `[[port]]`, in case order.
     pub fn ports(&self) -> Vec<PortValue> {
         self.pool.install(|| self.engine.ports())
+    }
+
+    /// Every `stride`-th particle's state (stride ≥ 1; 1: all), in storage order.
+    pub fn particles(&self, stride: usize) -> Vec<ParticleState> {
+        self.engine.particles(stride.max(1))
     }
 
     /// Values at every `[[probe]]`, in case order.

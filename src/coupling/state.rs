@@ -139,7 +139,11 @@ pub(super) fn restore<const D: usize>(
         b.motion = now.motion.clone();
     }
     sys.bodies = bodies;
-    sys.ports = saved.ports;
+    let mut ports = saved.ports;
+    for (k, now) in ports.iter_mut().zip(&sys.ports) {
+        k.pressure = now.pressure.clone();
+    }
+    sys.ports = ports;
     sys.time = saved.time;
     // the frame's pose is a function of time only (no external frame motion)
     if let Some(f) = &mut sys.frame {

@@ -68,11 +68,24 @@ pub fn write_vtu<const D: usize>(path: &Path, p: &Particles<D>, time: f64) -> io
     for v in &p.id {
         let _ = write!(s, "{v} ");
     }
-    s.push_str("\n</DataArray>\n<DataArray type=\"UInt16\" Name=\"material\" format=\"ascii\">\n");
-    for v in &p.material {
-        let _ = write!(s, "{v} ");
+    s.push_str("\n</DataArray>\n");
+    // material; body (b + 1 for a wall particle of body b, else 0); port (k + 1 for a buffer
+    // particle of port k, else 0)
+    for (name, data) in [
+        ("material", &p.material),
+        ("body", &p.body),
+        ("port", &p.port),
+    ] {
+        let _ = writeln!(
+            s,
+            "<DataArray type=\"UInt16\" Name=\"{name}\" format=\"ascii\">"
+        );
+        for v in data.iter() {
+            let _ = write!(s, "{v} ");
+        }
+        s.push_str("\n</DataArray>\n");
     }
-    s.push_str("\n</DataArray>\n</PointData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
+    s.push_str("</PointData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
     write_atomic(path, s.as_bytes())
 }
 
