@@ -14,7 +14,8 @@ build:
 	$(CARGO) build --release
 
 # The FMUs: target/fmu/sphfmu.fmu (FMI 3.0) and sphfmu-fmi2.fmu (FMI 2.0) for FMU_CASE, and
-# the same pair for the hydrostatic tank under target/fmu/closed-tank2d/ (the tests use both).
+# the same pair for the hydrostatic tank under target/fmu/closed-tank2d/ and for the channel
+# between two pressure ports under target/fmu/channel-ports2d/ (the tests use all three).
 FMU_CASE ?= models/free-piston2d.toml
 FMU_LIB := target/release/libsphfmu_fmu.so
 PACKAGE := target/release/sphfmu-package
@@ -22,6 +23,7 @@ fmu:
 	$(CARGO) build --release -p sphfmu-fmu
 	$(PACKAGE) --case $(FMU_CASE) --lib $(FMU_LIB) --models models --out target/fmu
 	$(PACKAGE) --case models/closed-tank2d.toml --lib $(FMU_LIB) --models models --out target/fmu/closed-tank2d
+	$(PACKAGE) --case models/channel-ports2d.toml --lib $(FMU_LIB) --models models --out target/fmu/channel-ports2d
 
 # Main job: build the FMU and co-simulate a free piston on a gas spring with a Python master
 # (fmpy) -> target/demo/free_piston.png, and the period against the gas-spring theory.

@@ -10,7 +10,9 @@
 pub mod ffi;
 pub mod fmi2;
 pub mod fmi3;
+pub mod inputs;
 pub mod model;
 pub mod state_ffi;
 pub mod table;
+pub mod units;
 pub mod xml;

@@ -1,9 +1,10 @@
 //! One FMU instance behind both FMI faces: the state machine, parameters, inputs, outputs,
 //! FMU states. `fmi2.rs` and `fmi3.rs` only translate C arguments and status codes.
 
+use crate::inputs::{start_inputs, Inputs, Snapshot};
 use crate::table::{Binding, Causality, Kind, Param, Start, Table};
 use sphfmu::case::Case;
-use sphfmu::coupling::{BodyKinematics, Coupling, CouplingOptions};
+use sphfmu::coupling::{Coupling, CouplingOptions};
 use std::path::{Path, PathBuf};
 
 /// FMI status codes (the same numbers in FMI 2.0 and 3.0).
@@ -64,20 +65,6 @@ impl Params {
 struct Output {
     written: Vec<(f64, String)>,
     next: f64,
-}
-
-#[derive(Debug, Clone, PartialEq)]
-struct Inputs {
-    gravity: [f64; 3],
-    /// Per externally driven body (order of `Table::external_bodies`).
-    bodies: Vec<BodyKinematics>,
-}
-
-/// A saved FMU state: the solver's bytes plus what the instance keeps beside them.
-pub struct Snapshot {
-    inputs: Inputs,
-    start_time: f64,
-    solver: Vec<u8>,
 }
 
 pub struct Instance {
@@ -246,6 +233,10 @@ impl Instance {
             .map_err(|e| (Status::Error, e.0))?;
         for (k, &b) in self.table.external_bodies.iter().enumerate() {
             c.set_body_kinematics(b, &self.inputs.bodies[k])
+                .map_err(|e| (Status::Error, e.0))?;
+        }
+        for (k, &p) in self.table.external_ports.iter().enumerate() {
+            c.set_port_pressure(p, self.inputs.ports[k])
                 .map_err(|e| (Status::Error, e.0))?;
         }
         Ok(())
@@ -433,6 +424,14 @@ impl Instance {
             Binding::BodyAngularVelocity(b) => {
                 self.inputs.bodies[ext(b)].angular_velocity = values[0]
             }
+            Binding::PortPressure(k) => {
+                let p = values[0];
+                if p < 0.0 {
+                    return err(format!("{name}: must be a finite number ≥ 0, got {p}"));
+                }
+                let e = self.table.external_port_index(k);
+                self.inputs.ports[e] = p;
+            }
             _ => return err(format!("{name}: cannot be set")),
         }
         Ok(())
@@ -488,6 +487,7 @@ impl Instance {
             Binding::BodyVelocity(b) => self.inputs.bodies[ext(b)].velocity.to_vec(),
             Binding::BodyAngle(b) => vec![self.inputs.bodies[ext(b)].angle],
             Binding::BodyAngularVelocity(b) => vec![self.inputs.bodies[ext(b)].angular_velocity],
+            Binding::PortPressure(k) => vec![self.inputs.ports[self.table.external_port_index(k)]],
             _ => {
                 if v.causality != Causality::Output {
                     return err(format!("{}: not a Float64 value", v.name));
@@ -523,6 +523,8 @@ impl Instance {
             Binding::PatchPeak(k) => vec![c.patches()[k].peak_pressure],
             Binding::PatchArea(k) => vec![c.patches()[k].area],
             Binding::PatchForce(k) => c.patches()[k].force.to_vec(),
+            Binding::Port(k, what) => vec![what.of(&c.ports()[k])],
+            Binding::FluidParticles => vec![d().fluid_particles as f64],
             Binding::Dt => vec![d().dt],
             Binding::Mass => vec![d().mass],
             Binding::Momentum => d().momentum.to_vec(),
@@ -537,7 +539,9 @@ impl Instance {
         let v = &self.table.variables[i];
         match v.binding {
             Binding::Param(Param::Threads) => Ok(self.params.threads),
-            Binding::Steps | Binding::Particles => Ok(self.output(i)?[0] as i64),
+            Binding::Steps | Binding::Particles | Binding::FluidParticles => {
+                Ok(self.output(i)?[0] as i64)
+            }
             _ => err(format!("{}: not an integer", v.name)),
         }
     }
@@ -587,8 +591,12 @@ impl Instance {
             &[Mode::Step, Mode::Failed, Mode::Initialization],
         )?;
         self.ensure_coupling()?;
-        if s.inputs.bodies.len() != self.table.external_bodies.len() {
-            return err("setFMUState: the state belongs to another model (body inputs differ)");
+        if s.inputs.bodies.len() != self.table.external_bodies.len()
+            || s.inputs.ports.len() != self.table.external_ports.len()
+        {
+            return err(
+                "setFMUState: the state belongs to another model (body or port inputs differ)",
+            );
         }
         let c = self.coupling.as_mut().expect("built above");
         c.restore(&s.solver)
@@ -597,83 +605,5 @@ impl Instance {
         self.start_time = s.start_time;
         self.mode = Mode::Step;
         Ok(())
-    }
-}
-
-fn start_inputs(table: &Table) -> Inputs {
-    let mut inputs = Inputs {
-        gravity: [0.0; 3],
-        bodies: vec![BodyKinematics::default(); table.external_bodies.len()],
-    };
-    for v in &table.variables {
-        if let (Causality::Input, Start::Float(x)) = (v.causality, &v.start) {
-            match v.binding {
-                Binding::Gravity => inputs.gravity.copy_from_slice(x),
-                Binding::BodyPosition(b) => {
-                    let k = table
-                        .external_bodies
-                        .iter()
-                        .position(|&e| e == b)
-                        .expect("listed");
-                    inputs.bodies[k].position.copy_from_slice(x);
-                }
-                _ => {}
-            }
-        }
-    }
-    inputs
-}
-
-impl Snapshot {
-    /// Bytes: gravity, start time, then per body 8 numbers, then the solver's state.
-    pub fn serialize(&self) -> Vec<u8> {
-        let mut out = Vec::new();
-        let mut put = |x: f64| out.extend_from_slice(&x.to_le_bytes());
-        self.inputs.gravity.iter().for_each(|x| put(*x));
-        put(self.start_time);
-        put(self.inputs.bodies.len() as f64);
-        for b in &self.inputs.bodies {
-            b.position.iter().chain(&b.velocity).for_each(|x| put(*x));
-            put(b.angle);
-            put(b.angular_velocity);
-        }
-        out.extend_from_slice(&self.solver);
-        out
-    }
-
-    pub fn deserialize(bytes: &[u8]) -> Result<Snapshot, String> {
-        let mut at = 0;
-        let mut get = || -> Result<f64, String> {
-            let b = bytes
-                .get(at..at + 8)
-                .ok_or("serialized FMU state: too short")?;
-            at += 8;
-            Ok(f64::from_le_bytes(b.try_into().expect("8 bytes")))
-        };
-        let mut gravity = [0.0; 3];
-        for g in &mut gravity {
-            *g = get()?;
-        }
-        let start_time = get()?;
-        let n = get()?;
-        if !(0.0..=65535.0).contains(&n) || n.fract() != 0.0 {
-            return Err("serialized FMU state: damaged body count".into());
-        }
-        let mut bodies = vec![];
-        for _ in 0..n as usize {
-            let mut k = BodyKinematics::default();
-            for x in k.position.iter_mut().chain(k.velocity.iter_mut()) {
-                *x = get()?;
-            }
-            k.angle = get()?;
-            k.angular_velocity = get()?;
-            bodies.push(k);
-        }
-        let used = 8 * (5 + 8 * n as usize);
-        Ok(Snapshot {
-            inputs: Inputs { gravity, bodies },
-            start_time,
-            solver: bytes[used..].to_vec(),
-        })
     }
 }

@@ -2,7 +2,8 @@
 //! `fmi3GetFMUState` … differ only in names): the state handle is a boxed `Snapshot`.
 
 use crate::ffi::{slice, slice_mut};
-use crate::model::{CallResult, Instance, Snapshot, Status};
+use crate::inputs::Snapshot;
+use crate::model::{CallResult, Instance, Status};
 use std::ffi::c_void;
 
 fn bad<T>(msg: impl Into<String>) -> CallResult<T> {

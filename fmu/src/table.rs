@@ -1,12 +1,14 @@
 //! The one table of FMU variables. Both modelDescription.xml files are written from it and
 //! every getter and setter dispatches through it, so the XML and the binary cannot disagree.
-//! It is a function of the packaged case (its dimension, bodies, probes and markers).
+//! It is a function of the packaged case (its dimension, bodies, probes, markers, patches and ports).
 //!
 //! FMI 3.0 sees 3-vectors as arrays (`<Dimension start="3"/>`, one value reference); FMI 2.0
 //! sees them flattened to `name[1]`, `name[2]`, `name[3]` (structured naming convention),
 //! each with its own value reference.
 
+use crate::units::units;
 use sphfmu::boundary::kinematics::Motion;
+use sphfmu::boundary::ports::PortPressure;
 use sphfmu::case::Case;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -58,12 +60,43 @@ pub enum Binding {
     PatchPeak(usize),
     PatchArea(usize),
     PatchForce(usize),
+    /// Input: the pressure of case port k (its pressure is `external`).
+    PortPressure(usize),
+    /// Output: one value of case port k.
+    Port(usize, PortOutput),
     Steps,
     Dt,
     Particles,
+    FluidParticles,
     Mass,
     Momentum,
     Energy,
+}
+
+/// What a port output reports (see `sphfmu::coupling::PortValue`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PortOutput {
+    Pressure,
+    MeanPressure,
+    Velocity,
+    VolumeFlow,
+    MassFlow,
+    MassIn,
+    MassOut,
+}
+
+impl PortOutput {
+    pub fn of(self, v: &sphfmu::coupling::PortValue) -> f64 {
+        match self {
+            PortOutput::Pressure => v.pressure,
+            PortOutput::MeanPressure => v.mean_pressure,
+            PortOutput::Velocity => v.velocity,
+            PortOutput::VolumeFlow => v.volume_flow,
+            PortOutput::MassFlow => v.mass_flow,
+            PortOutput::MassIn => v.mass_in,
+            PortOutput::MassOut => v.mass_out,
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -94,7 +127,7 @@ impl Variable {
         self.kind != Kind::Float64
             || matches!(
                 self.binding,
-                Binding::Steps | Binding::Dt | Binding::Particles
+                Binding::Steps | Binding::Dt | Binding::Particles | Binding::FluidParticles
             )
     }
 }
@@ -114,74 +147,9 @@ pub struct Table {
     pub dimension: usize,
     /// Bodies driven from outside (index into the case's bodies).
     pub external_bodies: Vec<usize>,
+    /// Ports whose pressure is set from outside (index into the case's ports).
+    pub external_ports: Vec<usize>,
 }
-
-/// Units by dimension: a 2D case is per metre of depth.
-struct Units {
-    area: &'static str,
-    force: &'static str,
-    torque: &'static str,
-    mass: &'static str,
-    momentum: &'static str,
-    energy: &'static str,
-}
-
-fn units(dimension: usize) -> Units {
-    match dimension {
-        1 => Units {
-            area: "1",
-            force: "N/m2",
-            torque: "N/m",
-            mass: "kg/m2",
-            momentum: "kg/(m.s)",
-            energy: "J/m2",
-        },
-        2 => Units {
-            area: "m",
-            force: "N/m",
-            torque: "N",
-            mass: "kg/m",
-            momentum: "kg/s",
-            energy: "J/m",
-        },
-        _ => Units {
-            area: "m2",
-            force: "N",
-            torque: "N.m",
-            mass: "kg",
-            momentum: "kg.m/s",
-            energy: "J",
-        },
-    }
-}
-
-/// Every unit a table may use, with its SI base-unit exponents (kg, m, s), for
-/// `<UnitDefinitions>`.
-pub const UNITS: &[(&str, [i32; 3])] = &[
-    ("s", [0, 0, 1]),
-    ("m", [0, 1, 0]),
-    ("m/s", [0, 1, -1]),
-    ("m/s2", [0, 1, -2]),
-    ("rad", [0, 0, 0]),
-    ("1", [0, 0, 0]),
-    ("m2", [0, 2, 0]),
-    ("rad/s", [0, 0, -1]),
-    ("Pa", [1, -1, -2]),
-    ("kg/m3", [1, -3, 0]),
-    ("N/m2", [1, -1, -2]),
-    ("N/m", [1, 0, -2]),
-    ("N", [1, 1, -2]),
-    ("N.m", [1, 2, -2]),
-    ("kg/m2", [1, -2, 0]),
-    ("kg/m", [1, -1, 0]),
-    ("kg", [1, 0, 0]),
-    ("kg/(m.s)", [1, -1, -1]),
-    ("kg/s", [1, 0, -1]),
-    ("kg.m/s", [1, 1, -1]),
-    ("J/m2", [1, 0, -2]),
-    ("J/m", [1, 1, -2]),
-    ("J", [1, 2, -2]),
-];
 
 fn pad3(v: &[f64]) -> Vec<f64> {
     (0..3).map(|k| v.get(k).copied().unwrap_or(0.0)).collect()
@@ -226,7 +194,7 @@ impl Table {
             Binding::Time,
         );
         add("case".into(), Kind::String, Parameter, 1, Start::Text(case_file.into()), None,
-            "Case file: a name in the FMU's resources/ folder or an absolute path; it must have the packaged case's bodies, probes and markers".into(),
+            "Case file: a name in the FMU's resources/ folder or an absolute path; it must have the packaged case's bodies, probes, markers, patches and ports".into(),
             Binding::Param(Param::Case));
         add("scheme".into(), Kind::String, Parameter, 1, Start::Text(String::new()), None,
             "Scheme preset replacing the case's (with its own kernel and integrator): standard, rpsph, rosswog-f1..f4, crksph, compsph, compsph-cullen, psph; empty = the case's".into(),
@@ -403,46 +371,82 @@ impl Table {
         }
         for (i, pa) in case.patches.iter().enumerate() {
             let n = &pa.name;
-            add(
-                format!("patch.{n}.mean_pressure"),
-                Kind::Float64,
-                Output,
-                1,
-                Start::None,
-                Some("Pa"),
-                format!("Mean wall pressure on patch {n} of body {}", pa.body),
-                Binding::PatchMean(i),
-            );
-            add(
-                format!("patch.{n}.peak_pressure"),
-                Kind::Float64,
-                Output,
-                1,
-                Start::None,
-                Some("Pa"),
-                format!("Peak wall pressure on patch {n}"),
-                Binding::PatchPeak(i),
-            );
-            add(
-                format!("patch.{n}.area"),
-                Kind::Float64,
-                Output,
-                1,
-                Start::None,
-                Some(u.area),
-                format!("Area of patch {n}"),
-                Binding::PatchArea(i),
-            );
-            add(
-                format!("patch.{n}.force"),
-                Kind::Float64,
-                Output,
-                3,
-                Start::None,
-                Some(u.force),
-                format!("Force of the fluid on patch {n}"),
-                Binding::PatchForce(i),
-            );
+            let outputs = [
+                (
+                    "mean_pressure",
+                    1,
+                    "Pa",
+                    Binding::PatchMean(i),
+                    "Mean wall pressure on patch {n} of body {b}",
+                ),
+                (
+                    "peak_pressure",
+                    1,
+                    "Pa",
+                    Binding::PatchPeak(i),
+                    "Peak wall pressure on patch {n}",
+                ),
+                (
+                    "area",
+                    1,
+                    u.area,
+                    Binding::PatchArea(i),
+                    "Area of patch {n}",
+                ),
+                (
+                    "force",
+                    3,
+                    u.force,
+                    Binding::PatchForce(i),
+                    "Force of the fluid on patch {n}",
+                ),
+            ];
+            for (suffix, size, unit, binding, description) in outputs {
+                let description = description.replace("{n}", n).replace("{b}", &pa.body);
+                add(
+                    format!("patch.{n}.{suffix}"),
+                    Kind::Float64,
+                    Output,
+                    size,
+                    Start::None,
+                    Some(unit),
+                    description,
+                    binding,
+                );
+            }
+        }
+        let mut external_ports = vec![];
+        for (i, p) in case.ports.iter().enumerate() {
+            let n = &p.name;
+            if let PortPressure::External { initial } = p.pressure {
+                external_ports.push(i);
+                add(format!("port.{n}.pressure"), Kind::Float64, Input, 1,
+                    Start::Float(vec![initial]), Some("Pa"),
+                    format!("Pressure at port {n} (gauge of the case's EOS, finite and ≥ 0), held between steps"),
+                    Binding::PortPressure(i));
+            }
+            use PortOutput::*;
+            let outputs = [
+                ("pressure_set", "Pa", Pressure, "Pressure in force at port {n} (the input or the case's function)"),
+                ("mean_pressure", "Pa", MeanPressure, "Mean fluid pressure across the opening of port {n}"),
+                ("velocity", "m/s", Velocity, "Mean velocity through port {n} along its normal (positive into the fluid)"),
+                ("volume_flow", u.volume_flow, VolumeFlow, "Volume flow into the fluid through port {n} (sampled on the opening)"),
+                ("mass_flow", u.mass_flow, MassFlow, "Mass flow into the fluid through port {n} (sampled on the opening)"),
+                ("mass_in", u.mass, MassIn, "Fluid mass that entered through port {n} since the start (exact: particles counted as they cross)"),
+                ("mass_out", u.mass, MassOut, "Fluid mass that left through port {n} since the start (exact)"),
+            ];
+            for (suffix, unit, what, description) in outputs {
+                add(
+                    format!("port.{n}.{suffix}"),
+                    Kind::Float64,
+                    Output,
+                    1,
+                    Start::None,
+                    Some(unit),
+                    description.replace("{n}", n),
+                    Binding::Port(i, what),
+                );
+            }
         }
         add(
             "diag.steps".into(),
@@ -471,8 +475,18 @@ impl Table {
             1,
             Start::None,
             None,
-            "Particles (fluid and wall)".into(),
+            "Particles (fluid, wall and port buffer)".into(),
             Binding::Particles,
+        );
+        add(
+            "diag.fluid_particles".into(),
+            Kind::Int64,
+            Output,
+            1,
+            Start::None,
+            None,
+            "Fluid particles (ports create and delete them)".into(),
+            Binding::FluidParticles,
         );
         add(
             "diag.mass".into(),
@@ -518,7 +532,16 @@ impl Table {
             fmi2,
             dimension: d,
             external_bodies,
+            external_ports,
         }
+    }
+
+    /// Position of case port `port` among those with an external pressure (they have inputs).
+    pub fn external_port_index(&self, port: usize) -> usize {
+        self.external_ports
+            .iter()
+            .position(|&x| x == port)
+            .expect("inputs exist only for externally driven ports")
     }
 
     /// Position of case body `body` among the externally driven ones (those have inputs).
@@ -554,6 +577,10 @@ impl Table {
                     .iter()
                     .map(|m| m.name.clone())
                     .chain(c.patches.iter().map(|p| format!("patch {}", p.name)))
+                    .chain(c.ports.iter().map(|p| {
+                        let ext = matches!(p.pressure, PortPressure::External { .. });
+                        format!("port {} (external: {ext})", p.name)
+                    }))
                     .collect::<Vec<_>>(),
             )
         };
@@ -572,7 +599,7 @@ impl Table {
         }
         if a.2 != b.2 || a.3 != b.3 {
             return Err(format!(
-                "probes {:?} and markers and patches {:?}; the FMU's variables are for {:?} and {:?}",
+                "probes {:?} and markers, patches and ports {:?}; the FMU's variables are for {:?} and {:?}",
                 b.2, b.3, a.2, a.3
             ));
         }

@@ -448,7 +448,8 @@ impl<const D: usize> System<D> {
         let first_copy = keep.len();
         keep.extend(copies.iter().map(|&(i, _)| i));
         let p = &mut self.particles;
-        let mut next_id = p.id.iter().copied().max().map_or(0, |m| m + 1);
+        // fresh ids after the largest in use (ids stay unique and stable)
+        let next_id = p.id.iter().copied().max().map_or(0, |m| m + 1);
         p.permute(&keep);
         for (j, &(_, k)) in copies.iter().enumerate() {
             let c = first_copy + j;
@@ -456,8 +457,7 @@ impl<const D: usize> System<D> {
             p.pos[c] -= port.normal * port.depth;
             p.rest[c] = p.pos[c];
             p.port[c] = k as u16 + 1;
-            p.id[c] = next_id;
-            next_id += 1;
+            p.id[c] = next_id + j as u32;
         }
         self.reset_neighbours();
         true

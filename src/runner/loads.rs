@@ -1,6 +1,8 @@
 //! The force history of every body over a run: `bodies.csv` (t, then F_x, F_y[, F_z] per
 //! body) and `loads.png` (one panel per body and component), written next to
-//! diagnostics.csv when the case has bodies.
+//! diagnostics.csv when the case has bodies; and the flow history of every port: `ports.csv`
+//! (t, then per port its mean pressure, volume flow into the fluid, and the exact mass in and
+//! out since the start) and `ports.png` (volume flow per port).
 
 use crate::io::plot::{profile_png, Panel};
 use crate::sim::Simulation;
@@ -12,10 +14,27 @@ pub struct LoadHistory {
     names: Vec<String>,
     dim: usize,
     rows: Vec<(f64, Vec<f64>)>,
+    ports: Vec<String>,
+    port_rows: Vec<(f64, Vec<f64>)>,
 }
+
+/// Columns per port in ports.csv.
+const PORT_COLUMNS: [&str; 4] = ["mean_pressure", "volume_flow", "mass_in", "mass_out"];
 
 impl LoadHistory {
     pub fn record<const D: usize>(&mut self, sim: &Simulation<D>) {
+        if !sim.sys.ports.is_empty() {
+            if self.ports.is_empty() {
+                self.ports = sim.sys.ports.iter().map(|p| p.name.clone()).collect();
+            }
+            let row = (0..sim.sys.ports.len())
+                .flat_map(|k| {
+                    let v = crate::coupling::sampling::port_value(&sim.sys, k);
+                    [v.mean_pressure, v.volume_flow, v.mass_in, v.mass_out]
+                })
+                .collect();
+            self.port_rows.push((sim.time, row));
+        }
         if sim.sys.bodies.is_empty() {
             return;
         }
@@ -32,8 +51,10 @@ impl LoadHistory {
         self.rows.push((sim.time, f));
     }
 
-    /// Write bodies.csv and loads.png into `dir` (nothing without bodies).
+    /// Write bodies.csv and loads.png (with bodies), ports.csv and ports.png (with ports)
+    /// into `dir`.
     pub fn write(&self, dir: &Path) -> Result<(), String> {
+        self.write_ports(dir)?;
         if self.names.is_empty() {
             return Ok(());
         }
@@ -83,5 +104,51 @@ impl LoadHistory {
             })
             .collect();
         profile_png(&dir.join("loads.png"), "Body loads (from the run)", &panels)
+    }
+
+    fn write_ports(&self, dir: &Path) -> Result<(), String> {
+        if self.ports.is_empty() {
+            return Ok(());
+        }
+        let csv = dir.join("ports.csv");
+        let mut text = std::iter::once("t".to_string())
+            .chain(
+                self.ports
+                    .iter()
+                    .flat_map(|n| PORT_COLUMNS.map(|c| format!("{n}.{c}"))),
+            )
+            .collect::<Vec<_>>()
+            .join(",")
+            + "\n";
+        for (t, row) in &self.port_rows {
+            text.push_str(&format!("{t:.9e}"));
+            row.iter().for_each(|x| text.push_str(&format!(",{x:.9e}")));
+            text.push('\n');
+        }
+        std::fs::write(&csv, text).map_err(|e| format!("{}: {e}", csv.display()))?;
+        let series: Vec<(String, Vec<(f64, f64)>)> = (0..self.ports.len())
+            .map(|k| {
+                let pts = self
+                    .port_rows
+                    .iter()
+                    .map(|(t, r)| (*t, r[4 * k + 1]))
+                    .collect();
+                (
+                    format!("volume flow into the fluid at port {} vs t", self.ports[k]),
+                    pts,
+                )
+            })
+            .collect();
+        let panels: Vec<Panel<'_>> = series
+            .iter()
+            .map(|(title, pts)| Panel {
+                title,
+                particles: &[],
+                exact: pts,
+                x_desc: "t (s)",
+                line_label: "sphfmu",
+            })
+            .collect();
+        profile_png(&dir.join("ports.png"), "Port flows (from the run)", &panels)
     }
 }

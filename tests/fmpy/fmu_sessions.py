@@ -329,6 +329,51 @@ def session_snapshots(fmu_path, out_dir):
             "variables": len(md.modelVariables)}
 
 
+def session_port_pressure(fmu_path):
+    """A network master drives the channel FMU's inlet pressure through simulate_fmu: 0.06 Pa
+    until t = 4, then 0.12; it reads the port flows and the exact mass counters."""
+    from fmpy import simulate_fmu
+    sig = np.array([(0.0, 0.06), (4.0, 0.06), (4.0, 0.12), (8.0, 0.12)],
+                   dtype=[("time", "f8"), ("port.inlet.pressure", "f8")])
+    out = ["port.inlet.volume_flow", "port.outlet.volume_flow", "port.inlet.mass_in",
+           "port.inlet.mass_out", "port.outlet.mass_in", "port.outlet.mass_out",
+           "port.inlet.pressure_set", "diag.mass", "diag.fluid_particles", "diag.particles"]
+    res = simulate_fmu(fmu_path, stop_time=8.0, step_size=0.1, output_interval=0.1, input=sig,
+                       start_values={"threads": 2}, output=out)
+    t = res["time"]
+    q = 0.5 * (res["port.inlet.volume_flow"] - res["port.outlet.volume_flow"])
+    net = (res["port.inlet.mass_in"] + res["port.outlet.mass_in"]
+           - res["port.inlet.mass_out"] - res["port.outlet.mass_out"])
+    balance = res["diag.mass"] - res["diag.mass"][0] - net
+    return {
+        "q1": float(q[(t > 3.0) & (t <= 4.0)].mean()),
+        "q2": float(q[t > 7.0].mean()),
+        "set_before": float(res["port.inlet.pressure_set"][t <= 3.95].max()),
+        "set_after": float(res["port.inlet.pressure_set"][-1]),
+        "balance": float(np.abs(balance).max() / res["diag.mass"][0]),
+        "moved": float(res["port.outlet.mass_out"][-1]),
+        "fluid_changes": int(len(set(res["diag.fluid_particles"].tolist()))),
+        "finite": bool(np.all(np.isfinite(q))),
+    }
+
+
+def session_bad_port_pressure(fmu_path, fmi):
+    """Negative and NaN port pressures: errors with a log line; the input keeps its value."""
+    fmu, vr = open_fmu(fmu_path, fmi=fmi)
+    codes = {}
+    for name, value in [("negative", -1.0), ("nan", float("nan"))]:
+        if fmi == 3:
+            codes[name] = expect_error(lambda: fmu.setFloat64([vr["port.inlet.pressure"]], [value]))
+        else:
+            codes[name] = expect_error(lambda: fmu.setReal([vr["port.inlet.pressure"]], [value]))
+    kept = list(fmu.getFloat64([vr["port.inlet.pressure"]])) if fmi == 3 else \
+        list(fmu.getReal([vr["port.inlet.pressure"]]))
+    fmu.doStep(0.0, 0.1)
+    fmu.terminate()
+    fmu.freeInstance()
+    return {"codes": codes, "kept": kept, "log": [m for _, _, m in LOG]}
+
+
 if __name__ == "__main__":
     name, args = sys.argv[1], json.loads(sys.argv[2]) if len(sys.argv) > 2 else {}
     result = globals()["session_" + name](**args)

@@ -1,0 +1,112 @@
+//! What the instance keeps beside the solver: the input values the master set (applied at the
+//! next doStep) and the FMU state snapshots that carry them with the solver's bytes.
+
+use crate::table::{Binding, Causality, Start, Table};
+use sphfmu::coupling::BodyKinematics;
+
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Inputs {
+    pub gravity: [f64; 3],
+    /// Per externally driven body (order of `Table::external_bodies`).
+    pub bodies: Vec<BodyKinematics>,
+    /// Per port with an external pressure (order of `Table::external_ports`).
+    pub ports: Vec<f64>,
+}
+
+/// A saved FMU state: the solver's bytes plus what the instance keeps beside them.
+pub struct Snapshot {
+    pub(crate) inputs: Inputs,
+    pub(crate) start_time: f64,
+    pub(crate) solver: Vec<u8>,
+}
+
+/// The inputs at their start values.
+pub(crate) fn start_inputs(table: &Table) -> Inputs {
+    let mut inputs = Inputs {
+        gravity: [0.0; 3],
+        bodies: vec![BodyKinematics::default(); table.external_bodies.len()],
+        ports: vec![0.0; table.external_ports.len()],
+    };
+    for v in &table.variables {
+        if let (Causality::Input, Start::Float(x)) = (v.causality, &v.start) {
+            match v.binding {
+                Binding::Gravity => inputs.gravity.copy_from_slice(x),
+                Binding::BodyPosition(b) => {
+                    inputs.bodies[table.external_index(b)]
+                        .position
+                        .copy_from_slice(x);
+                }
+                Binding::PortPressure(k) => inputs.ports[table.external_port_index(k)] = x[0],
+                _ => {}
+            }
+        }
+    }
+    inputs
+}
+
+impl Snapshot {
+    /// Bytes (f64 little endian): gravity, start time, the body count and 8 numbers per body,
+    /// the port count and one pressure per port, then the solver's state.
+    pub fn serialize(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        let mut put = |x: f64| out.extend_from_slice(&x.to_le_bytes());
+        self.inputs.gravity.iter().for_each(|x| put(*x));
+        put(self.start_time);
+        put(self.inputs.bodies.len() as f64);
+        for b in &self.inputs.bodies {
+            b.position.iter().chain(&b.velocity).for_each(|x| put(*x));
+            put(b.angle);
+            put(b.angular_velocity);
+        }
+        put(self.inputs.ports.len() as f64);
+        self.inputs.ports.iter().for_each(|x| put(*x));
+        out.extend_from_slice(&self.solver);
+        out
+    }
+
+    pub fn deserialize(bytes: &[u8]) -> Result<Snapshot, String> {
+        let mut at = 0;
+        let mut get = || -> Result<f64, String> {
+            let b = bytes
+                .get(at..at + 8)
+                .ok_or("serialized FMU state: too short")?;
+            at += 8;
+            Ok(f64::from_le_bytes(b.try_into().expect("8 bytes")))
+        };
+        let count = |n: f64, what: &str| {
+            if (0.0..=65535.0).contains(&n) && n.fract() == 0.0 {
+                Ok(n as usize)
+            } else {
+                Err(format!("serialized FMU state: damaged {what} count"))
+            }
+        };
+        let mut gravity = [0.0; 3];
+        for g in &mut gravity {
+            *g = get()?;
+        }
+        let start_time = get()?;
+        let n = count(get()?, "body")?;
+        let mut bodies = vec![];
+        for _ in 0..n {
+            let mut k = BodyKinematics::default();
+            for x in k.position.iter_mut().chain(k.velocity.iter_mut()) {
+                *x = get()?;
+            }
+            k.angle = get()?;
+            k.angular_velocity = get()?;
+            bodies.push(k);
+        }
+        let m = count(get()?, "port")?;
+        let ports = (0..m).map(|_| get()).collect::<Result<Vec<_>, _>>()?;
+        let used = 8 * (6 + 8 * n + m);
+        Ok(Snapshot {
+            inputs: Inputs {
+                gravity,
+                bodies,
+                ports,
+            },
+            start_time,
+            solver: bytes[used..].to_vec(),
+        })
+    }
+}
