@@ -93,17 +93,7 @@ impl LoadHistory {
                 (format!("force on {n}, {} component vs t", axes[k]), pts)
             })
             .collect();
-        let panels: Vec<Panel<'_>> = series
-            .iter()
-            .map(|(title, pts)| Panel {
-                title,
-                particles: &[],
-                exact: pts,
-                x_desc: "t (s)",
-                line_label: "sphfmu",
-            })
-            .collect();
-        profile_png(&dir.join("loads.png"), "Body loads (from the run)", &panels)
+        time_series_png(&dir.join("loads.png"), "Body loads (from the run)", &series)
     }
 
     fn write_ports(&self, dir: &Path) -> Result<(), String> {
@@ -139,16 +129,25 @@ impl LoadHistory {
                 )
             })
             .collect();
-        let panels: Vec<Panel<'_>> = series
-            .iter()
-            .map(|(title, pts)| Panel {
-                title,
-                particles: &[],
-                exact: pts,
-                x_desc: "t (s)",
-                line_label: "sphfmu",
-            })
-            .collect();
-        profile_png(&dir.join("ports.png"), "Port flows (from the run)", &panels)
+        time_series_png(&dir.join("ports.png"), "Port flows (from the run)", &series)
     }
+}
+
+/// One panel per (title, points against t) series.
+fn time_series_png(
+    path: &Path,
+    title: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+) -> Result<(), String> {
+    let panels: Vec<Panel<'_>> = series
+        .iter()
+        .map(|(title, pts)| Panel {
+            title,
+            particles: &[],
+            exact: pts,
+            x_desc: "t (s)",
+            line_label: "sphfmu",
+        })
+        .collect();
+    profile_png(path, title, &panels)
 }
