@@ -90,6 +90,15 @@ impl PortPressure {
                 Err(format!("{key}.{name}: must be finite, got {v}"))
             }
         };
+        let non_negative = |name: &str, v: f64| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(format!(
+                    "{key}.{name}: must be a finite number ≥ 0, got {v}"
+                ))
+            }
+        };
         match self {
             PortPressure::Constant { value } => finite("value", *value),
             PortPressure::Sinusoid {
@@ -101,12 +110,7 @@ impl PortPressure {
                 finite("mean", *mean)?;
                 finite("amplitude", *amplitude)?;
                 finite("phase", *phase)?;
-                if !(frequency.is_finite() && *frequency >= 0.0) {
-                    return Err(format!(
-                        "{key}.frequency: must be a finite number ≥ 0, got {frequency}"
-                    ));
-                }
-                Ok(())
+                non_negative("frequency", *frequency)
             }
             PortPressure::Ramp {
                 from,
@@ -117,12 +121,7 @@ impl PortPressure {
                 finite("from", *from)?;
                 finite("to", *to)?;
                 finite("start", *start)?;
-                if !(duration.is_finite() && *duration >= 0.0) {
-                    return Err(format!(
-                        "{key}.duration: must be a finite number ≥ 0, got {duration}"
-                    ));
-                }
-                Ok(())
+                non_negative("duration", *duration)
             }
             PortPressure::Table { time, value } => {
                 if time.is_empty() || time.len() != value.len() {
