@@ -15,7 +15,9 @@ build:
 
 # The FMUs: target/fmu/sphfmu.fmu (FMI 3.0) and sphfmu-fmi2.fmu (FMI 2.0) for FMU_CASE, and
 # the same pair for the hydrostatic tank under target/fmu/closed-tank2d/ and for the channel
-# between two pressure ports under target/fmu/channel-ports2d/ (the tests use all three).
+# between two pressure ports under target/fmu/channel-ports2d/ and the sloshing tank under
+# target/fmu/slosh2d/ (the tests use all four). `cargo build -p sphfmu-fmu` also builds the
+# zenoh node sphfmu-serve (`sphfmu serve`).
 FMU_CASE ?= models/free-piston2d.toml
 FMU_LIB := target/release/libsphfmu_fmu.so
 PACKAGE := target/release/sphfmu-package
@@ -24,6 +26,7 @@ fmu:
 	$(PACKAGE) --case $(FMU_CASE) --lib $(FMU_LIB) --models models --out target/fmu
 	$(PACKAGE) --case models/closed-tank2d.toml --lib $(FMU_LIB) --models models --out target/fmu/closed-tank2d
 	$(PACKAGE) --case models/channel-ports2d.toml --lib $(FMU_LIB) --models models --out target/fmu/channel-ports2d
+	$(PACKAGE) --case models/slosh2d.toml --lib $(FMU_LIB) --models models --out target/fmu/slosh2d
 
 # Main job: build the FMU and co-simulate a free piston on a gas spring with a Python master
 # (fmpy) -> target/demo/free_piston.png, and the period against the gas-spring theory.

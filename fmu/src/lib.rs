@@ -7,12 +7,16 @@
 //! No global mutable state: everything lives in the instance the master holds, each with its
 //! own rayon pool; every entry point catches panics.
 
+#[cfg(feature = "zenoh")]
+pub mod bridge;
 pub mod ffi;
 pub mod fmi2;
 pub mod fmi3;
 pub mod inputs;
+mod live;
 pub mod model;
 pub mod state_ffi;
 pub mod table;
 pub mod units;
 pub mod xml;
+pub mod zenoh_settings;

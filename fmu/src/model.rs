@@ -3,6 +3,7 @@
 
 use crate::inputs::{start_inputs, Inputs, Snapshot};
 use crate::table::{Binding, Causality, Kind, Param, Start, Table};
+use crate::zenoh_settings::{ZenohParam, ZenohSettings};
 use sphfmu::case::Case;
 use sphfmu::coupling::{Coupling, CouplingOptions};
 use std::path::{Path, PathBuf};
@@ -35,7 +36,7 @@ pub type Logger = Box<dyn Fn(Status, &str, &str)>;
 pub const DEFAULT_CASE_FILE: &str = "default-case.txt";
 
 #[derive(Debug, Clone, PartialEq)]
-struct Params {
+pub(crate) struct Params {
     case: String,
     scheme: String,
     resolution: f64,
@@ -43,6 +44,7 @@ struct Params {
     threads: i64,
     output_dir: String,
     output_interval: f64,
+    pub(crate) zenoh: ZenohSettings,
 }
 
 impl Params {
@@ -55,6 +57,7 @@ impl Params {
             threads: 0,
             output_dir: String::new(),
             output_interval: 0.0,
+            zenoh: ZenohSettings::default(),
         }
     }
 }
@@ -72,9 +75,12 @@ pub struct Instance {
     resources: PathBuf,
     packaged: Case,
     pub table: Table,
-    params: Params,
-    inputs: Inputs,
-    coupling: Option<Coupling>,
+    pub(crate) params: Params,
+    pub(crate) inputs: Inputs,
+    pub(crate) coupling: Option<Coupling>,
+    /// The zenoh bridge while live coupling is on (`zenoh.mode`).
+    #[cfg(feature = "zenoh")]
+    pub(crate) bridge: Option<crate::bridge::Bridge>,
     output: Output,
     pub mode: Mode,
     start_time: f64,
@@ -103,8 +109,20 @@ impl Instance {
             })?
             .trim()
             .to_string();
-        let packaged = Case::load(&resources.join(&case_file))
-            .map_err(|e| format!("resources/{case_file}: {}", e.0))?;
+        Instance::with_case(name, resources, &case_file, logger)
+    }
+
+    /// An instance of case file `case_file` in folder `resources` (the packaged FMU's
+    /// resources, or any folder for the zenoh node `sphfmu-serve`).
+    pub fn with_case(
+        name: &str,
+        resources: &Path,
+        case_file: &str,
+        logger: Logger,
+    ) -> Result<Instance, String> {
+        let case_file = case_file.to_string();
+        // (the error names the file)
+        let packaged = Case::load(&resources.join(&case_file)).map_err(|e| e.0)?;
         let table = Table::new(&packaged, &case_file);
         let params = Params::start(case_file);
         let inputs = start_inputs(&table);
@@ -116,6 +134,8 @@ impl Instance {
             params,
             inputs,
             coupling: None,
+            #[cfg(feature = "zenoh")]
+            bridge: None,
             output: Output::default(),
             mode: Mode::Instantiated,
             start_time: 0.0,
@@ -177,9 +197,11 @@ impl Instance {
         self.expect_mode("exitInitializationMode", &[Mode::Initialization])?;
         self.ensure_coupling()?;
         self.apply_inputs()?;
+        self.open_live()?;
         self.mode = Mode::Step;
         self.output = Output::default();
         self.write_output()?;
+        self.publish_live();
         let c = self.coupling.as_ref().expect("built above");
         let d = c.diagnostics();
         self.log(
@@ -227,7 +249,7 @@ impl Instance {
     }
 
     /// Hand the inputs to the solver (it ignores unchanged values).
-    fn apply_inputs(&mut self) -> CallResult<()> {
+    pub(crate) fn apply_inputs(&mut self) -> CallResult<()> {
         let c = self.coupling.as_mut().expect("coupling built");
         c.set_gravity(self.inputs.gravity)
             .map_err(|e| (Status::Error, e.0))?;
@@ -259,7 +281,7 @@ impl Instance {
                 "currentCommunicationPoint {current} is not the FMU's time {now}"
             ));
         }
-        self.apply_inputs()?;
+        self.apply_inputs_live()?;
         let target = current + h - self.start_time;
         let c = self.coupling.as_mut().expect("coupling built in step mode");
         match c.step_to(target) {
@@ -272,7 +294,9 @@ impl Instance {
                     r.dt_max
                 );
                 self.log(Status::Ok, "logSolver", &msg);
-                self.write_output()
+                let written = self.write_output();
+                self.publish_live();
+                written
             }
             Err(e) => {
                 self.mode = Mode::Failed;
@@ -314,6 +338,7 @@ impl Instance {
             &[Mode::Step, Mode::Initialization, Mode::Failed],
         )?;
         self.mode = Mode::Terminated;
+        self.close_live();
         self.log(Status::Ok, "logEvents", "terminated");
         Ok(())
     }
@@ -321,6 +346,7 @@ impl Instance {
     /// Back to the state after instantiation: start values, no solver.
     pub fn reset(&mut self) {
         self.coupling = None;
+        self.close_live();
         self.params = Params::start(match &self.table.variables[1].start {
             Start::Text(t) => t.clone(),
             _ => unreachable!("variable 1 is the case parameter"),
@@ -394,6 +420,11 @@ impl Instance {
                 }
                 self.params.output_interval = dt;
             }
+            Binding::Param(Param::Zenoh(ZenohParam::Staleness)) => self
+                .params
+                .zenoh
+                .set_staleness(values[0])
+                .map_err(|e| (Status::Error, e))?,
             Binding::Param(Param::Cfl) => {
                 let c = values[0];
                 if !(0.0..=1.0).contains(&c) {
@@ -466,6 +497,13 @@ impl Instance {
                 self.params.output_dir = value.to_string();
                 return Ok(());
             }
+            Binding::Param(Param::Zenoh(z)) => {
+                return self
+                    .params
+                    .zenoh
+                    .set_text(z, value)
+                    .map_err(|e| (Status::Error, e));
+            }
             _ => return err(format!("{}: cannot be set", self.table.variables[i].name)),
         }
         self.coupling = None;
@@ -482,6 +520,9 @@ impl Instance {
             Binding::Param(Param::Resolution) => vec![self.params.resolution],
             Binding::Param(Param::Cfl) => vec![self.params.cfl],
             Binding::Param(Param::OutputInterval) => vec![self.params.output_interval],
+            Binding::Param(Param::Zenoh(ZenohParam::Staleness)) => {
+                vec![self.params.zenoh.staleness]
+            }
             Binding::Gravity => self.inputs.gravity.to_vec(),
             Binding::BodyPosition(b) => self.inputs.bodies[ext(b)].position.to_vec(),
             Binding::BodyVelocity(b) => self.inputs.bodies[ext(b)].velocity.to_vec(),
@@ -551,6 +592,9 @@ impl Instance {
             Binding::Param(Param::Case) => Ok(self.params.case.clone()),
             Binding::Param(Param::Scheme) => Ok(self.params.scheme.clone()),
             Binding::Param(Param::OutputDir) => Ok(self.params.output_dir.clone()),
+            Binding::Param(Param::Zenoh(z)) if z != ZenohParam::Staleness => {
+                Ok(self.params.zenoh.text(z))
+            }
             _ => err(format!("{}: not a string", self.table.variables[i].name)),
         }
     }

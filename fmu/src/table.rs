@@ -37,6 +37,7 @@ pub enum Param {
     Threads,
     OutputDir,
     OutputInterval,
+    Zenoh(crate::zenoh_settings::ZenohParam),
 }
 
 /// What a variable reads or writes.
@@ -250,6 +251,23 @@ impl Table {
             "Simulation time between snapshots, ≥ 0; 0 = after every doStep".into(),
             Binding::Param(Param::OutputInterval),
         );
+        for (name, kind, start, description, which) in crate::zenoh_settings::parameter_rows() {
+            let start = match kind {
+                Kind::Float64 => Start::Float(vec![start.parse().expect("a number")]),
+                _ => Start::Text(start.into()),
+            };
+            let unit = (kind == Kind::Float64).then_some("s");
+            add(
+                name.into(),
+                kind,
+                Parameter,
+                1,
+                start,
+                unit,
+                description.into(),
+                Binding::Param(Param::Zenoh(which)),
+            );
+        }
         add("gravity".into(), Kind::Float64, Input, 3,
             Start::Float(pad3(case.gravity.as_deref().unwrap_or(&[]))), Some("m/s2"),
             format!("Uniform gravity (entries beyond the case's {d} dimensions must be 0), held between steps"),

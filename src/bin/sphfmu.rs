@@ -88,6 +88,33 @@ enum Command {
         #[arg(long)]
         json: Option<PathBuf>,
     },
+    /// Serve a case over zenoh (step, get, set, save_state, restore_state, snapshot): runs
+    /// `sphfmu-serve` from the same folder (built with the FMU crate, which has zenoh; the
+    /// core library does not). `sphfmu serve --help` lists its options.
+    #[command(disable_help_flag = true)]
+    Serve {
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+}
+
+/// `sphfmu serve ...`: hand over to `sphfmu-serve` next to this binary (as git does with
+/// `git-<name>`), so the core CLI needs no zenoh.
+fn serve(args: &[String]) -> ExitCode {
+    let node = std::env::current_exe()
+        .ok()
+        .map(|p| p.with_file_name("sphfmu-serve"))
+        .filter(|p| p.exists());
+    let Some(node) = node else {
+        return fail(
+            1,
+            "serve: sphfmu-serve is not next to sphfmu; build it with `cargo build --release -p sphfmu-fmu` (or `make fmu`)",
+        );
+    };
+    match std::process::Command::new(&node).args(args).status() {
+        Ok(s) => ExitCode::from(s.code().unwrap_or(1).clamp(0, 255) as u8),
+        Err(e) => fail(1, format!("serve: cannot run {}: {e}", node.display())),
+    }
 }
 
 fn fail(code: u8, msg: impl std::fmt::Display) -> ExitCode {
@@ -118,6 +145,7 @@ fn main() -> ExitCode {
         }
     };
     match cli.command {
+        Command::Serve { args } => serve(&args),
         Command::Kernels => {
             use sphfmu::kernel::{neighbours_for_eta, AnyKernel, Kernel};
             println!("| kernel | σ 1D | σ 2D | σ 3D | η | neighbours 2D | 3D | Q1 = ε_ρ | Q2/r_s | Q3·r_s | Q4 | ∇x error |");

@@ -1,0 +1,262 @@
+"""Live-coupling sessions for test_zenoh.py, each in its own Python process (as fmu_sessions.py):
+
+    python zenoh_sessions.py <session> '<json args>'
+
+prints one JSON line with the results. The FMU (fmpy's FMU3Slave) or the node listens on a
+loopback port chosen by the test; this process's zenoh peer connects to it (multicast off)."""
+import json
+import math
+import pathlib
+import subprocess
+import sys
+import time
+
+import cbor2
+import numpy as np
+import zenoh
+
+from fmu_sessions import LOG, open_fmu
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+G = 9.81
+
+
+def peer(port):
+    conf = zenoh.Config()
+    conf.insert_json5("mode", '"peer"')
+    conf.insert_json5("scouting/multicast/enabled", "false")
+    conf.insert_json5("scouting/gossip/enabled", "false")
+    conf.insert_json5("connect/endpoints", json.dumps([f"tcp/127.0.0.1:{port}"]))
+    return zenoh.open(conf)
+
+
+def wait_for(session, key, timeout=20.0):
+    """Query `key` until it answers (the link is up and declarations have propagated)."""
+    end = time.time() + timeout
+    while time.time() < end:
+        for r in session.get(key, timeout=1.0):
+            if r.ok is not None:
+                time.sleep(0.2)
+                return cbor2.loads(r.ok.payload.to_bytes())
+        time.sleep(0.1)
+    raise RuntimeError(f"{key}: no answer within {timeout} s")
+
+
+def query(session, key, request=None, timeout=60.0, raw=False):
+    """One request to the node: (ok, decoded reply; the bytes with raw)."""
+    payload = cbor2.dumps(request) if isinstance(request, dict) else request
+    for r in session.get(key, payload=payload, timeout=timeout):
+        if r.ok is not None:
+            b = r.ok.payload.to_bytes()
+            return True, bytes(b) if raw else cbor2.loads(b)
+        return False, cbor2.loads(r.err.payload.to_bytes())
+    raise RuntimeError(f"{key}: no reply")
+
+
+def live_fmu(path, port, prefix, staleness=1.0, on_stale="hold"):
+    fmu, vr = open_fmu(path, init=False)
+    fmu.setDebugLogging(True, ["logEvents", "logStatusWarning", "logStatusError"])
+    fmu.enterInitializationMode(startTime=0.0)
+    fmu.setInt64([vr["threads"]], [2])
+    for k, v in [("zenoh.mode", "peer"), ("zenoh.listen", f"tcp/127.0.0.1:{port}"),
+                 ("zenoh.prefix", prefix), ("zenoh.on_stale", on_stale)]:
+        fmu.setString([vr[k]], [v])
+    fmu.setFloat64([vr["zenoh.staleness"]], [staleness])
+    fmu.exitInitializationMode()
+    return fmu, vr
+
+
+def excitation(t):
+    """Horizontal gravity: one period of a 0.5 m/s² sine near the first sloshing mode."""
+    return 0.5 * math.sin(2 * math.pi * t / 1.18) if t < 1.18 else 0.0
+
+
+def session_publish_and_gravity(fmu_path, port, prefix):
+    """Every step's force arrives with its time; a gravity published over zenoh doubles the
+    force on the tank while the master's value stays what the master set."""
+    fmu, vr = live_fmu(fmu_path, port, prefix)
+    got = []
+    with peer(port) as s:
+        sub = s.declare_subscriber(f"{prefix}/out/tank.force",
+                                   lambda smp: got.append(cbor2.loads(smp.payload.to_bytes())))
+        wait_for(s, f"{prefix}/snapshot")
+        t, h, times, fy = 0.0, 0.02, [], []
+        for k in range(40):
+            if k == 20:
+                s.put(f"{prefix}/in/gravity", cbor2.dumps([0.0, -2 * G]))
+                time.sleep(0.3)
+            fmu.doStep(t, h)
+            t += h
+            times.append(t)
+            f = list(fmu.getFloat64([vr["tank.force"]], nValues=3))
+            fy.append(f[1])
+        deadline = time.time() + 5
+        while len(got) < 40 and time.time() < deadline:
+            time.sleep(0.05)
+        master_g = list(fmu.getFloat64([vr["gravity"]], nValues=3))
+        snap = query(s, f"{prefix}/snapshot?stride=3")[1]
+        bad = query(s, f"{prefix}/snapshot?stride=0")
+        sub.undeclare()
+    fmu.terminate()
+    fmu.freeInstance()
+    pos = np.frombuffer(snap["position"], "<f8").reshape(-1, 2)
+    return {
+        "received": len(got),
+        "times": [g["t"] for g in got],
+        "expected_times": times,
+        "same_force": bool(abs(got[-1]["v"][1] - f[1]) == 0.0),
+        "fy": fy,
+        "ratio": float(np.mean(fy[30:]) / np.mean(fy[10:20])),
+        "master_gravity": master_g,
+        "snapshot_count": snap["count"],
+        "snapshot_t": snap["t"],
+        "snapshot_in_tank": bool(np.all((pos[:, 0] > 0) & (pos[:, 0] < 1) & (pos[:, 1] > 0))),
+        "snapshot_rho": float(np.frombuffer(snap["density"], "<f8").mean()),
+        "bad_stride": bad,
+    }
+
+
+def node_run(port, prefix, n=100, h=0.02):
+    """The sloshing run stepped through the node; the outputs per step."""
+    names = ["tank.force", "patch.left.mean_pressure", "probe.left.pressure"]
+    node = subprocess.Popen([str(ROOT / "target" / "release" / "sphfmu"), "serve",
+                             "--case", str(ROOT / "models" / "slosh2d.toml"), "--prefix", prefix,
+                             "--listen", f"tcp/127.0.0.1:{port}", "--set", "threads=2"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        line = node.stdout.readline()
+        assert "ready" in line, (line, node.stderr.read())
+        rows, extra = [], {}
+        with peer(port) as s:
+            wait_for(s, f"{prefix}/snapshot")
+            t = 0.0
+            for k in range(n):
+                ok, r = query(s, f"{prefix}/set", {"values": {"gravity": [excitation(t), -G]}})
+                assert ok, r
+                ok, r = query(s, f"{prefix}/step", {"h": h})
+                assert ok, r
+                t = r["t"]
+                ok, r = query(s, f"{prefix}/get", {"names": names})
+                assert ok, r
+                v = r["values"]
+                rows.append(list(v["tank.force"]) + [v["patch.left.mean_pressure"], v["probe.left.pressure"]])
+                if k == n // 2:
+                    ok, saved = query(s, f"{prefix}/save_state", raw=True)
+                    assert ok and len(saved) > 0
+                    extra["saved_t"] = t
+            # requests are checked as FMU calls: a bad one is an error reply and changes nothing
+            extra["bad_gravity"] = query(s, f"{prefix}/set", {"values": {"gravity": [0.0, -G, 1.0]}})
+            extra["bad_name"] = query(s, f"{prefix}/get", {"names": ["tank.nothing"]})
+            extra["bad_step"] = query(s, f"{prefix}/step", {"h": -1.0})
+            extra["bad_parameter"] = query(s, f"{prefix}/set", {"values": {"resolution": 2.0}})
+            extra["bad_state"] = query(s, f"{prefix}/restore_state", b"not a state")
+            ok, r = query(s, f"{prefix}/get", {"names": ["time", "gravity"]})
+            extra["after_bad"] = r["values"]
+            # back to the middle of the run and on again: the same outputs as the first time
+            ok, r = query(s, f"{prefix}/restore_state", saved)
+            extra["restored_t"] = r["t"]
+            replay = []
+            tt = r["t"]
+            for k in range(n // 2 + 1, n):
+                query(s, f"{prefix}/set", {"values": {"gravity": [excitation(tt), -G]}})
+                ok, r = query(s, f"{prefix}/step", {"h": h})
+                tt = r["t"]
+                ok, r = query(s, f"{prefix}/get", {"names": names})
+                v = r["values"]
+                replay.append(list(v["tank.force"]) + [v["patch.left.mean_pressure"], v["probe.left.pressure"]])
+            extra["replay_same"] = bool(np.array_equal(np.array(replay), np.array(rows[n // 2 + 1:])))
+            query(s, f"{prefix}/stop", {})
+        node.wait(timeout=20)
+        extra["exit"] = node.returncode
+        return rows, extra
+    finally:
+        if node.poll() is None:
+            node.kill()
+
+
+def fmu_run(fmu_path, n=100, h=0.02):
+    fmu, vr = open_fmu(fmu_path)
+    rows, t = [], 0.0
+    for k in range(n):
+        fmu.setFloat64([vr["gravity"]], [excitation(t), -G, 0.0])
+        fmu.doStep(t, h)
+        t += h
+        f = list(fmu.getFloat64([vr["tank.force"]], nValues=3))
+        rows.append(f + list(fmu.getFloat64([vr["patch.left.mean_pressure"], vr["probe.left.pressure"]])))
+    fmu.terminate()
+    fmu.freeInstance()
+    return rows
+
+
+def session_node_matches_fmu(fmu_path, port, prefix):
+    node_rows, extra = node_run(port, prefix)
+    fmu_rows = fmu_run(fmu_path)
+    a, b = np.array(node_rows), np.array(fmu_rows)
+    fx = b[:, 0]
+    late = fx[60:]
+    return {
+        **extra,
+        "max_difference": float(np.abs(a - b).max()),
+        "identical": bool(np.array_equal(a, b)),
+        "sign_changes_after_excitation": int(np.sum(np.diff(np.sign(late - late.mean())) != 0)),
+        "fx_amplitude": float(np.abs(late - late.mean()).max()),
+        "weight": float(b[:, 1].mean()),
+    }
+
+
+def session_peer_gone_and_back(fmu_path, port, prefix, on_stale):
+    """A live gravity publisher steps in lockstep, disappears for longer than the staleness
+    limit, then comes back with another value; malformed payloads on the way are refused."""
+    fmu, vr = live_fmu(fmu_path, port, prefix, staleness=0.3, on_stale=on_stale)
+    t, h = 0.0, 0.02
+    forces, statuses = [], []
+
+    def step():
+        nonlocal t
+        try:
+            fmu.doStep(t, h)
+            t += h
+            statuses.append("ok")
+        except Exception as e:  # noqa: BLE001 - fmpy raises on an error status
+            statuses.append(f"error: {e}")
+        forces.append(fmu.getFloat64([vr["tank.force"]], nValues=3)[1])
+
+    with peer(port) as s:
+        wait_for(s, f"{prefix}/snapshot")
+        for k in range(10):
+            s.put(f"{prefix}/in/gravity", cbor2.dumps({"v": [0.0, -2 * G]}))
+            time.sleep(0.02)
+            step()
+        # malformed payloads: refused with a logged reason, nothing changes
+        s.put(f"{prefix}/in/gravity", b"\xff\xfe")
+        s.put(f"{prefix}/in/gravity", cbor2.dumps([0.0, -G, 0.0, 1.0]))
+        s.put(f"{prefix}/in/gravity", cbor2.dumps([0.0, float("nan")]))
+        s.put(f"{prefix}/in/no.such.input", cbor2.dumps(1.0))
+        s.put(f"{prefix}/in/gravity", cbor2.dumps([0.0, -G, 5.0]))  # checked like a master's set
+        time.sleep(0.1)
+        step()
+    # the peer is gone: the FMU keeps stepping
+    gone_from = len(forces)
+    for k in range(10):
+        time.sleep(0.05)
+        step()
+    gone_to = len(forces)
+    with peer(port) as s:
+        wait_for(s, f"{prefix}/snapshot")
+        for k in range(25):
+            s.put(f"{prefix}/in/gravity", cbor2.dumps([0.0, -3 * G]))
+            time.sleep(0.02)
+            step()
+    fmu.terminate()
+    fmu.freeInstance()
+    return {
+        "forces": forces,
+        "statuses": statuses,
+        "gone": [gone_from, gone_to],
+        "log": [(int(s), c, m) for s, c, m in LOG],
+    }
+
+
+if __name__ == "__main__":
+    name, args = sys.argv[1], json.loads(sys.argv[2])
+    print(json.dumps(globals()[f"session_{name}"](**args)))
