@@ -67,9 +67,11 @@ libclang:
 	  || { echo "libclang: could not install libclang-dev; install it (apt-get install libclang-dev) and rerun"; exit 1; }; \
 	fi
 
-# Throughput table (particle-updates/s, pair interactions/s), 2D and 3D periodic boxes.
-bench: build
+# Throughput table (particle-updates/s, pair interactions/s), 2D and 3D periodic boxes; then
+# live coupling on loopback: round trips with the zenoh node, publishing's cost per doStep.
+bench: build fmu venv
 	$(BIN) bench --sizes 10000,100000,1000000 --dims 2,3 --steps 5 --json target/bench.json
+	$(VPY) tools/bench_zenoh.py --json target/bench-zenoh.json
 
 # Side-by-side with PySPH on the 2D Noh problem (installs PySPH into target/peer-venv).
 bench-peer: build

@@ -1,7 +1,7 @@
 //! Standard SPH conserves linear momentum to round-off per step and total energy to the
 //! integrator's accuracy, on a random 2D periodic box.
 
-mod common;
+use crate::common;
 
 use sphfmu::case::Case;
 

@@ -1,7 +1,7 @@
 //! CRKSPH reproducing kernels (spec §2, App A): linear fields and their gradients reproduced on
 //! jittered 1D/2D/3D points, Σ V W^R = 1, Σ V ∇W^R = 0, and ∇A, ∇B against finite differences.
 
-mod common;
+use crate::common;
 
 use nalgebra::SMatrix;
 use sphfmu::case::Case;

@@ -2,7 +2,7 @@
 //! shock radius), Noh 2D (post-shock density and shock position), the hydrostatic square
 //! (exact density, no motion), and the 1D acoustic wave's convergence order.
 
-mod common;
+use crate::common;
 
 use sphfmu::case::Case;
 use sphfmu::runner::run_case;

@@ -2,7 +2,7 @@
 //! the flow neither starts to converge nor shears it on; and the corrected gradient it uses is
 //! exact for a linear field.
 
-mod common;
+use crate::common;
 
 use sphfmu::case::Case;
 use std::path::Path;

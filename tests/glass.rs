@@ -1,7 +1,7 @@
 //! Glass initial conditions (Rosswog spec §8.1): a relaxed, isotropic particle set with a
 //! near-perfect partition of unity.
 
-mod common;
+use crate::common;
 
 use sphfmu::case::Case;
 

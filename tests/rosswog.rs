@@ -1,6 +1,6 @@
 //! Rosswog (2015) formulations: IA gradient accuracy on lattices, conservation of F1–F4, Sod.
 
-mod common;
+use crate::common;
 
 use sphfmu::case::Case;
 use sphfmu::particles::Vector;

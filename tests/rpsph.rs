@@ -1,7 +1,7 @@
 //! rpSPH (Abel 2011): Newton's first law for any particle arrangement, and the static-lattice
 //! noise test of the rpSPH spec §3.1 against standard SPH.
 
-mod common;
+use crate::common;
 
 use sphfmu::case::Case;
 

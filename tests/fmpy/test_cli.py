@@ -1,6 +1,8 @@
 """The CLI as a user drives it: a Sod run checked against an independent exact solution
 (PyPI sodshock), VTU snapshots read back by meshio, and bad input rejected with exit code 2."""
 import csv
+import pathlib
+import subprocess
 import json
 
 import meshio
@@ -91,3 +93,26 @@ def test_run_help_lists_the_presets(sphfmu_bin):
     assert r.returncode == 0
     for preset in ("standard", "rpsph", "rosswog-f1", "rosswog-f2", "rosswog-f3", "rosswog-f4"):
         assert preset in r.stdout, preset
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["--case", "no-such-case.toml"], "no-such-case.toml: cannot read"),
+    (["--case", "models/slosh2d.toml", "--mode", "off"], "--mode: must be peer or client"),
+    (["--case", "models/slosh2d.toml", "--mode", "router"], "zenoh.mode: must be off, peer or client"),
+    (["--case", "models/slosh2d.toml", "--listen", "127.0.0.1:7447"], "zenoh.listen: each endpoint must read <protocol>/<address>"),
+    (["--case", "models/slosh2d.toml", "--prefix", "a/*/b"], "zenoh.prefix: must be a zenoh key without wildcards"),
+    (["--case", "models/slosh2d.toml", "--staleness=-1"], "zenoh.staleness: must be a finite number of seconds ≥ 0"),
+    (["--case", "models/slosh2d.toml", "--set", "resolution=50"], "--set resolution: must be in [0.1, 10], got 50"),
+    (["--case", "models/slosh2d.toml", "--set", "tank.force=1"], "--set tank.force: is not a parameter or input"),
+    (["--case", "models/slosh2d.toml", "--set", "threads"], "--set: expected NAME=VALUE"),
+    (["--case", "models/slosh2d.toml", "--run", "0"], "--run/--step: need run > start time"),
+])
+def test_serve_refuses_bad_options_with_one_line(sphfmu_bin, args, needle):
+    # sphfmu serve hands over to sphfmu-serve (built with the FMU crate, which has zenoh)
+    serve = pathlib.Path(sphfmu_bin).with_name("sphfmu-serve")
+    if not serve.exists():
+        subprocess.run(["cargo", "build", "--release", "-p", "sphfmu-fmu"], cwd=ROOT, check=True)
+    r = run([sphfmu_bin, "serve", *args], cwd=ROOT, timeout=60)
+    assert r.returncode != 0
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and needle in lines[0], r.stderr
