@@ -164,17 +164,18 @@ material = 1
 
 #[test]
 fn hydrostatic_square_keeps_its_shape_and_exact_density() {
-    // 48² so that the square's edges fall between lattice rows; to t = 7
-    square_survives(48);
+    // 48² so that the square's edges fall between lattice rows; to t = 2.5 here (the paper's
+    // t = 7 at 100² is the ignored test below; 48² to t = 7 measured the same round-off)
+    square_survives(48, 2.5);
 }
 
 #[test]
 #[ignore = "the paper's 100² (about 4 minutes on 2 cores): make verify"]
 fn hydrostatic_square_100_keeps_its_shape_and_exact_density() {
-    square_survives(100);
+    square_survives(100, 7.0);
 }
 
-fn square_survives(n: usize) {
+fn square_survives(n: usize, t_end: f64) {
     let case = Case::parse(&hydrostatic_square("crksph", n)).unwrap();
     let mut sim = case.build::<2>().unwrap();
     let x0 = sim.sys.particles.pos.clone();
@@ -195,7 +196,7 @@ fn square_survives(n: usize) {
         (spread(&inside).max(spread(&outside)), (ratio - 4.0).abs())
     };
     let (s0, r0) = check_density(&sim);
-    sim.advance_to(7.0, |_| {}).unwrap();
+    sim.advance_to(t_end, |_| {}).unwrap();
     let (s1, r1) = check_density(&sim);
     let p = &sim.sys.particles;
     let moved = (0..p.len())
@@ -205,7 +206,7 @@ fn square_survives(n: usize) {
         })
         .fold(0.0, f64::max);
     println!(
-        "hydrostatic square {n}², t = 7 ({} steps): density spread {s0:.1e} -> {s1:.1e}, ratio error {r0:.1e} -> {r1:.1e}, largest displacement {:.2e} spacings",
+        "hydrostatic square {n}², t = {t_end} ({} steps): density spread {s0:.1e} -> {s1:.1e}, ratio error {r0:.1e} -> {r1:.1e}, largest displacement {:.2e} spacings",
         sim.steps,
         moved * n as f64
     );

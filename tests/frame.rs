@@ -50,12 +50,13 @@ fn a_frame_acceleration_equals_moving_the_walls() {
     let shape = r#"shape = { type = "tank", min = [0.0, 0.0], max = [1.0, 0.8] }"#;
     let moving = model("tank2d.toml").replace(shape, &format!("{shape}\n{ramp}"));
     let framed = format!("{}\n[frame]\n{ramp}\n", model("tank2d.toml"));
-    let t_end = 1.2;
+    // to t = 0.8 (0.3 s of free sloshing after the ramp); 1.2 s gave the same figures
+    let t_end = 0.8;
     let a = accelerated_tank(&moving, t_end);
     let b = accelerated_tank(&framed, t_end);
     let (mut dx, mut sx, mut df, mut sf) = (0.0_f64, 0.0_f64, 0.0_f64, 0.0_f64);
     let x0 = a[0].1;
-    for k in 1..=24 {
+    for k in 1..=16 {
         let t = 0.05 * k as f64;
         dx = dx.max((at(&a, t, 1) - at(&b, t, 1)).abs());
         sx = sx.max((at(&a, t, 1) - x0).abs());
