@@ -10,19 +10,22 @@ BIN := target/release/sphfmu
 
 all: build
 
+# Always the whole workspace, as `cargo test --workspace` builds it: cargo unifies features
+# over the packages it builds, and a root-only build would resolve serde, syn, memchr ... with
+# other features and compile the dependency tree a second time (minutes on 2 cores).
 build:
-	$(CARGO) build --release
+	$(CARGO) build --release --workspace
 
 # The FMUs: target/fmu/sphfmu.fmu (FMI 3.0) and sphfmu-fmi2.fmu (FMI 2.0) for FMU_CASE, and
 # the same pair for the hydrostatic tank under target/fmu/closed-tank2d/ and for the channel
 # between two pressure ports under target/fmu/channel-ports2d/ and the sloshing tank under
-# target/fmu/slosh2d/ (the tests use all four). `cargo build -p sphfmu-fmu` also builds the
+# target/fmu/slosh2d/ (the tests use all four). `cargo build --workspace` also builds the
 # zenoh node sphfmu-serve (`sphfmu serve`).
 FMU_CASE ?= models/free-piston2d.toml
 FMU_LIB := target/release/libsphfmu_fmu.so
 PACKAGE := target/release/sphfmu-package
 fmu:
-	$(CARGO) build --release -p sphfmu-fmu
+	$(CARGO) build --release --workspace
 	$(PACKAGE) --case $(FMU_CASE) --lib $(FMU_LIB) --models models --out target/fmu
 	$(PACKAGE) --case models/closed-tank2d.toml --lib $(FMU_LIB) --models models --out target/fmu/closed-tank2d
 	$(PACKAGE) --case models/channel-ports2d.toml --lib $(FMU_LIB) --models models --out target/fmu/channel-ports2d

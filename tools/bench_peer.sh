@@ -24,5 +24,5 @@ if [[ ! -f $VENV/.installed ]]; then
   $VENV/bin/pip install --quiet --no-build-isolation pysph==1.0b2
   touch $VENV/.installed
 fi
-cargo build --release --quiet
+cargo build --release --workspace --quiet
 exec $VENV/bin/python tools/bench_peer.py --threads "$THREADS" --schemes "$SCHEMES"

@@ -108,7 +108,7 @@ fn serve(args: &[String]) -> ExitCode {
     let Some(node) = node else {
         return fail(
             1,
-            "serve: sphfmu-serve is not next to sphfmu; build it with `cargo build --release -p sphfmu-fmu` (or `make fmu`)",
+            "serve: sphfmu-serve is not next to sphfmu; build it with `cargo build --release --workspace` (or `make fmu`)",
         );
     };
     match std::process::Command::new(&node).args(args).status() {

@@ -111,7 +111,7 @@ def test_serve_refuses_bad_options_with_one_line(sphfmu_bin, args, needle):
     # sphfmu serve hands over to sphfmu-serve (built with the FMU crate, which has zenoh)
     serve = pathlib.Path(sphfmu_bin).with_name("sphfmu-serve")
     if not serve.exists():
-        subprocess.run(["cargo", "build", "--release", "-p", "sphfmu-fmu"], cwd=ROOT, check=True)
+        subprocess.run(["cargo", "build", "--release", "--workspace"], cwd=ROOT, check=True)
     r = run([sphfmu_bin, "serve", *args], cwd=ROOT, timeout=60)
     assert r.returncode != 0
     lines = r.stderr.strip().splitlines()

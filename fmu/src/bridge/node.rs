@@ -76,6 +76,13 @@ fn value(inst: &mut Instance, i: usize) -> Result<Value, String> {
 fn set(inst: &mut Instance, i: usize, v: &Value) -> Result<(), String> {
     let var = &inst.table.variables[i];
     let (name, size, kind) = (var.name.clone(), var.size, var.kind);
+    if !matches!(var.causality, Causality::Parameter | Causality::Input) {
+        // (before decoding the value, so the reason is the causality, as in the FMU)
+        return Err(format!(
+            "{name}: is not a parameter or input (causality {:?}), it cannot be set",
+            var.causality
+        ));
+    }
     let d = inst.table.dimension;
     let r = match (kind, v) {
         (Kind::Float64, _) => {
