@@ -66,6 +66,39 @@ def live_fmu(path, port, prefix, staleness=1.0, on_stale="hold"):
     return fmu, vr
 
 
+def session_fmi2_publishes(fmu_path, port, prefix):
+    """The same bridge behind the FMI 2.0 face: parameters set with fmi2SetString/SetReal,
+    every step's force published with its time, a live gravity taken."""
+    fmu, vr = open_fmu(fmu_path, fmi=2, init=False)
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.setInteger([vr["threads"]], [2])
+    for k, v in [("zenoh.mode", "peer"), ("zenoh.listen", f"tcp/127.0.0.1:{port}"),
+                 ("zenoh.prefix", prefix)]:
+        fmu.setString([vr[k]], [v])
+    fmu.setReal([vr["zenoh.staleness"]], [0.0])
+    fmu.exitInitializationMode()
+    got = []
+    with peer(port) as s:
+        sub = s.declare_subscriber(f"{prefix}/out/tank.force",
+                                   lambda smp: got.append(cbor2.loads(smp.payload.to_bytes())))
+        wait_for(s, f"{prefix}/snapshot")
+        s.put(f"{prefix}/in/gravity", cbor2.dumps([0.0, -2 * G]))
+        time.sleep(0.3)
+        t, fy = 0.0, []
+        for k in range(30):
+            fmu.doStep(t, 0.02)
+            t += 0.02
+            fy.append(fmu.getReal([vr["tank.force[2]"]])[0])
+        deadline = time.time() + 5
+        while len(got) < 30 and time.time() < deadline:
+            time.sleep(0.05)
+        sub.undeclare()
+    fmu.terminate()
+    fmu.freeInstance()
+    return {"received": len(got), "last_t": got[-1]["t"], "ratio": float(-np.mean(fy[-8:]) / (1000 * G * 0.5))}
+
+
 def excitation(t):
     """Horizontal gravity: one period of a 0.5 m/s² sine near the first sloshing mode."""
     return 0.5 * math.sin(2 * math.pi * t / 1.18) if t < 1.18 else 0.0
