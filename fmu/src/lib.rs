@@ -18,5 +18,6 @@ pub mod model;
 pub mod state_ffi;
 pub mod table;
 pub mod units;
+mod values;
 pub mod xml;
 pub mod zenoh_settings;
