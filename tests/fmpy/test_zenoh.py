@@ -87,6 +87,14 @@ def test_the_node_stepped_over_zenoh_equals_the_fmu_through_a_sloshing_run():
     assert r["exit"] == 0
 
 
+def test_the_node_runs_by_itself_and_keeps_serving():
+    r = session("node_runs_by_itself")
+    # it reached --run's end on its own, published on the way (samples in time order; how
+    # many depends on when the peer connected), and then took a step request
+    assert r["t"] == pytest.approx(0.4) and r["after"] == pytest.approx(0.42)
+    assert r["samples"] >= 1 and r["increasing"] and r["exit"] == 0
+
+
 @pytest.mark.parametrize("on_stale", ["hold", "master", "error"])
 def test_a_peer_that_disappears_and_comes_back(on_stale):
     r = session("peer_gone_and_back", fmu_path=str(SLOSH3), on_stale=on_stale)

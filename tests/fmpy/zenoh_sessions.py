@@ -207,6 +207,39 @@ def node_run(port, prefix, n=100, h=0.02):
             node.kill()
 
 
+def session_node_runs_by_itself(port, prefix):
+    """`sphfmu serve --run 0.4 --step 0.02`: the node steps itself, publishing as it goes,
+    then keeps serving requests."""
+    node = subprocess.Popen([str(ROOT / "target" / "release" / "sphfmu"), "serve",
+                             "--case", str(ROOT / "models" / "slosh2d.toml"), "--prefix", prefix,
+                             "--listen", f"tcp/127.0.0.1:{port}", "--run", "0.4", "--step", "0.02",
+                             "--set", "threads=1"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert "ready" in node.stdout.readline()
+        times = []
+        with peer(port) as s:
+            sub = s.declare_subscriber(f"{prefix}/out/diag.steps",
+                                       lambda smp: times.append(cbor2.loads(smp.payload.to_bytes())["t"]))
+            end = time.time() + 60
+            t = 0.0
+            while t < 0.4 - 1e-9 and time.time() < end:
+                ok, r = query(s, f"{prefix}/get", {"names": ["time"]})
+                t = r["values"]["time"]
+                time.sleep(0.05)
+            ok, r = query(s, f"{prefix}/step", {"h": 0.02})
+            after = r["t"]
+            sub.undeclare()
+            query(s, f"{prefix}/stop", {})
+        node.wait(timeout=20)
+        return {"t": t, "after": after, "samples": len(times),
+                "increasing": bool(all(b > a for a, b in zip(times, times[1:]))),
+                "exit": node.returncode}
+    finally:
+        if node.poll() is None:
+            node.kill()
+
+
 def fmu_run(fmu_path, n=100, h=0.02):
     fmu, vr = open_fmu(fmu_path)
     rows, t = [], 0.0
