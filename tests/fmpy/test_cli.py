@@ -116,3 +116,17 @@ def test_serve_refuses_bad_options_with_one_line(sphfmu_bin, args, needle):
     assert r.returncode != 0
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and needle in lines[0], r.stderr
+
+
+def test_serve_on_a_busy_port_is_a_one_line_error(sphfmu_bin):
+    import socket
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        r = run([sphfmu_bin, "serve", "--case", "models/slosh2d.toml", "--listen",
+                 f"tcp/127.0.0.1:{port}"], cwd=ROOT, timeout=60)
+    assert r.returncode == 1
+    last = r.stderr.strip().splitlines()[-1]
+    assert last.startswith("sphfmu serve: zenoh.listen / zenoh.connect: cannot open a zenoh session")
+    assert "Address already in use" in last

@@ -143,9 +143,9 @@ impl Bridge {
         outputs: Vec<(usize, String)>,
         dimension: usize,
     ) -> Result<Bridge, String> {
-        let session = zenoh::open(config(settings)?)
-            .wait()
-            .map_err(|e| zerr("cannot open a session (check zenoh.listen/connect)", e))?;
+        let session = zenoh::open(config(settings)?).wait().map_err(|e| {
+            format!("zenoh.listen / zenoh.connect: cannot open a zenoh session ({e})")
+        })?;
         Bridge::on_session(session, settings, prefix, inputs, outputs, dimension)
     }
 
