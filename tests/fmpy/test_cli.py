@@ -106,6 +106,7 @@ def test_run_help_lists_the_presets(sphfmu_bin):
     (["--case", "models/slosh2d.toml", "--set", "tank.force=1"], "--set tank.force: is not a parameter or input"),
     (["--case", "models/slosh2d.toml", "--set", "threads"], "--set: expected NAME=VALUE"),
     (["--case", "models/slosh2d.toml", "--run", "0"], "--run/--step: need run > start time"),
+    (["--case", "models/slosh2d.toml", "--config", "/no/such/zenoh.json5"], "zenoh.config:"),
 ])
 def test_serve_refuses_bad_options_with_one_line(sphfmu_bin, args, needle):
     # sphfmu serve hands over to sphfmu-serve (built with the FMU crate, which has zenoh)

@@ -95,6 +95,11 @@ def test_the_node_runs_by_itself_and_keeps_serving():
     assert r["samples"] >= 1 and r["increasing"] and r["exit"] == 0
 
 
+def test_the_node_takes_its_endpoints_from_a_zenoh_config_file(tmp_path):
+    r = session("node_from_a_config_file", config=str(tmp_path / "zenoh.json5"))
+    assert r["ok"] and r["t"] == pytest.approx(0.1) and r["exit"] == 0
+
+
 @pytest.mark.parametrize("on_stale", ["hold", "master", "error"])
 def test_a_peer_that_disappears_and_comes_back(on_stale):
     r = session("peer_gone_and_back", fmu_path=str(SLOSH3), on_stale=on_stale)

@@ -240,6 +240,28 @@ def session_node_runs_by_itself(port, prefix):
             node.kill()
 
 
+def session_node_from_a_config_file(port, prefix, config):
+    """`sphfmu serve --config FILE`: the listener comes from a zenoh JSON5 file."""
+    pathlib.Path(config).write_text(
+        '{ mode: "peer", listen: { endpoints: ["tcp/127.0.0.1:%d"] },'
+        ' scouting: { multicast: { enabled: false }, gossip: { enabled: false } } }' % port)
+    node = subprocess.Popen([str(ROOT / "target" / "release" / "sphfmu"), "serve",
+                             "--case", str(ROOT / "models" / "slosh2d.toml"), "--prefix", prefix,
+                             "--config", config, "--set", "threads=1"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert "ready" in node.stdout.readline()
+        with peer(port) as s:
+            wait_for(s, f"{prefix}/snapshot")
+            ok, r = query(s, f"{prefix}/step", {"t": 0.1})
+            query(s, f"{prefix}/stop", {})
+        node.wait(timeout=20)
+        return {"ok": ok, "t": r["t"], "exit": node.returncode}
+    finally:
+        if node.poll() is None:
+            node.kill()
+
+
 def fmu_run(fmu_path, n=100, h=0.02):
     fmu, vr = open_fmu(fmu_path)
     rows, t = [], 0.0

@@ -32,7 +32,8 @@ struct Args {
     /// zenoh mode: peer (no router needed) or client
     #[arg(long, default_value = "peer")]
     mode: String,
-    /// Endpoints to listen on, comma separated (default tcp/127.0.0.1:7447 unless --connect)
+    /// Endpoints to listen on, comma separated (default tcp/127.0.0.1:7447 unless --connect
+    /// or --config)
     #[arg(long)]
     listen: Option<String>,
     /// Endpoints to connect to, comma separated
@@ -82,14 +83,9 @@ fn setup(a: &Args) -> Result<Instance, String> {
         eprintln!("sphfmu-serve [{s:?}] {cat}: {msg}");
     });
     let mut inst = Instance::with_case("node", &folder, &file, logger)?;
-    let mut cats = vec!["logEvents", "logStatusWarning", "logStatusError"];
-    if a.verbose {
-        cats.push("logSolver");
-    }
-    inst.set_debug_logging(true, cats.into_iter().map(String::from).collect())
-        .map_err(|e| e.1)?;
+    // the default listener only when nothing else says where to be reached
     let listen = a.listen.clone().unwrap_or_else(|| {
-        if a.connect.is_empty() {
+        if a.connect.is_empty() && a.config.is_empty() {
             "tcp/127.0.0.1:7447".into()
         } else {
             String::new()
@@ -126,6 +122,13 @@ fn setup(a: &Args) -> Result<Instance, String> {
     }
     inst.enter_initialization(a.start_time).map_err(|e| e.1)?;
     inst.exit_initialization().map_err(|e| e.1)?;
+    // logging from here on: a failed start is the one line main prints
+    let mut cats = vec!["logEvents", "logStatusWarning", "logStatusError"];
+    if a.verbose {
+        cats.push("logSolver");
+    }
+    inst.set_debug_logging(true, cats.into_iter().map(String::from).collect())
+        .map_err(|e| e.1)?;
     Ok(inst)
 }
 
