@@ -11,43 +11,25 @@
 import argparse
 import json
 import pathlib
-import socket
 import subprocess
 import sys
 import time
 
-import cbor2
 import numpy as np
-import zenoh
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "fmpy"))
 from fmu_sessions import open_fmu  # noqa: E402
+from zenoh_sessions import free_port, peer, query  # noqa: E402
 
 FMU = ROOT / "target" / "fmu" / "slosh2d" / "sphfmu.fmu"
 
 
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def peer(port):
-    conf = zenoh.Config()
-    conf.insert_json5("mode", '"peer"')
-    conf.insert_json5("scouting/multicast/enabled", "false")
-    conf.insert_json5("scouting/gossip/enabled", "false")
-    conf.insert_json5("connect/endpoints", json.dumps([f"tcp/127.0.0.1:{port}"]))
-    return zenoh.open(conf)
-
-
 def ask(s, key, request):
-    for r in s.get(key, payload=cbor2.dumps(request), timeout=30.0):
-        if r.ok is None:
-            raise RuntimeError(cbor2.loads(r.err.payload.to_bytes()))
-        return cbor2.loads(r.ok.payload.to_bytes())
-    raise RuntimeError(f"{key}: no reply")
+    ok, r = query(s, key, request, timeout=30.0)
+    if not ok:
+        raise RuntimeError(r)
+    return r
 
 
 def stats(samples):

@@ -3,12 +3,13 @@ zenoh peer on loopback (multicast scouting off, a free port per test). Each sess
 own process (zenoh_sessions.py), as the FMU sessions do."""
 import json
 import pathlib
-import socket
 import subprocess
 import sys
 import uuid
 
 import pytest
+
+from zenoh_sessions import free_port
 
 HERE = pathlib.Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -19,12 +20,6 @@ SLOSH3 = ROOT / "target" / "fmu" / "slosh2d" / "sphfmu.fmu"
 def packaged():
     if not SLOSH3.exists() or not (ROOT / "target" / "release" / "sphfmu-serve").exists():
         subprocess.run(["make", "fmu"], cwd=ROOT, check=True)
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def session(name, **args):

@@ -21,6 +21,14 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 G = 9.81
 
 
+def free_port():
+    """A loopback TCP port nobody listens on now (for one test's zenoh listener)."""
+    import socket
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
 def peer(port):
     conf = zenoh.Config()
     conf.insert_json5("mode", '"peer"')
