@@ -146,17 +146,6 @@ impl Bridge {
         let session = zenoh::open(config(settings)?).wait().map_err(|e| {
             format!("zenoh.listen / zenoh.connect: cannot open a zenoh session ({e})")
         })?;
-        Bridge::on_session(session, settings, prefix, inputs, outputs, dimension)
-    }
-
-    fn on_session(
-        session: Session,
-        settings: &ZenohSettings,
-        prefix: &str,
-        inputs: Vec<InputSpec>,
-        outputs: Vec<(usize, String)>,
-        dimension: usize,
-    ) -> Result<Bridge, String> {
         let mut publishers = Vec::with_capacity(outputs.len());
         let mut names = HashMap::new();
         for (i, name) in outputs {
