@@ -80,26 +80,33 @@ impl Instance {
                 return Err((Status::Error, e));
             }
             let master = self.inputs.clone();
-            for lv in x.apply {
-                // checked like a master's set (ranges, dimension); a refused value leaves
-                // the input as it was (the previous live value, else the master's)
-                let r = self.set_f64(lv.index, 0, &lv.values);
-                if let Err((_, e)) = &r {
-                    let msg = format!("zenoh input refused, nothing changed: {e}");
-                    self.log(Status::Warning, "logStatusWarning", &msg);
-                    if let Some(prev) = self.bridge.as_ref().and_then(|b| b.accepted(lv.index)) {
-                        self.set_f64(lv.index, 0, &prev)?;
-                    }
-                }
-                if let Some(b) = self.bridge.as_mut() {
-                    b.settle(&lv, r.is_ok());
-                }
-            }
-            let r = self.apply_inputs();
+            // the master's values come back whatever happens
+            let r = self.overlay_live(x.apply).and_then(|_| self.apply_inputs());
             self.inputs = master;
             return r;
         }
         self.apply_inputs()
+    }
+
+    /// Put live values over the master's inputs, each checked like a master's set (ranges,
+    /// dimension); a refused value leaves the input as it was (the previous live value, else
+    /// the master's).
+    #[cfg(feature = "zenoh")]
+    fn overlay_live(&mut self, apply: Vec<crate::bridge::LiveValue>) -> CallResult<()> {
+        for lv in apply {
+            let r = self.set_f64(lv.index, 0, &lv.values);
+            if let Err((_, e)) = &r {
+                let msg = format!("zenoh input refused, nothing changed: {e}");
+                self.log(Status::Warning, "logStatusWarning", &msg);
+                if let Some(prev) = self.bridge.as_ref().and_then(|b| b.accepted(lv.index)) {
+                    self.set_f64(lv.index, 0, &prev)?;
+                }
+            }
+            if let Some(b) = self.bridge.as_mut() {
+                b.settle(&lv, r.is_ok());
+            }
+        }
+        Ok(())
     }
 
     /// Publish every output and keep the particles for snapshot queries (after
