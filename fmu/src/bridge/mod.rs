@@ -82,7 +82,6 @@ pub struct Exchange {
 
 pub struct Bridge {
     session: Session,
-    prefix: String,
     settings: ZenohSettings,
     outputs: Vec<(usize, Publisher<'static>)>,
     inbox: Arc<Mutex<Inbox>>,
@@ -231,7 +230,6 @@ impl Bridge {
             .map_err(|e| zerr("snapshot queryable", e))?;
         Ok(Bridge {
             session,
-            prefix: prefix.to_string(),
             settings: settings.clone(),
             outputs: publishers,
             inbox,
@@ -246,10 +244,6 @@ impl Bridge {
 
     pub fn session(&self) -> &Session {
         &self.session
-    }
-
-    pub fn prefix(&self) -> &str {
-        &self.prefix
     }
 
     /// The live inputs to apply now, by the precedence rule of the module comment.
