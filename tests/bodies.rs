@@ -110,10 +110,12 @@ fn a_slow_piston_feels_the_adiabatic_pressure() {
         worst = worst.max((piston.force[0] / exact - 1.0).abs());
     }
     println!("gas spring: largest deviation from P0 (L0/L)^γ A over one period {worst:.4}");
-    // measured 1.17 % (every step after t = 0.5; the largest at t ≈ 7, an acoustic ringing
-    // on the expanding stroke; sampled every 200 steps the deviations stay within 0.8 %). The
-    // issue asks 1 % at all phases: not met yet, so this bound is the measured value + 25 %.
-    assert!(worst < 0.015, "deviation {worst}");
+    // measured 0.72 % (every step after t = 0.5; Wendland C4, models/piston2d.toml). Most of
+    // it is physics the adiabatic law leaves out: the gas column accelerates with the piston,
+    // so the pressure on the piston differs from the mean by −ρ a L/3 (up to 0.42 % of P at the
+    // turning points); the one-second means of the deviation follow that term within 0.2 %.
+    // The issue: 1 % at all phases.
+    assert!(worst < 0.01, "deviation {worst}");
 }
 
 /// Mean pressure of the wall particles at height y (0.2 < x < 0.8).

@@ -7,7 +7,9 @@
 use sphfmu::case::Case;
 use std::path::Path;
 
-/// A model's text with its `[scheme]` table replaced by `scheme`.
+/// A model's text with its `[scheme]` table replaced by `scheme`, together with a `[kernel]`
+/// table between it and `[time]` (piston2d.toml's choice for standard SPH), so that each scheme
+/// runs with its own kernel.
 fn with_scheme(model: &str, scheme: &str) -> String {
     let text = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR"))
