@@ -217,70 +217,75 @@ fn fluid_momentum_change_and_body_impulse_balance_to_round_off() {
 }
 
 #[test]
-#[ignore = "55 s, and not yet at the issue's 3 %: make verify"]
 fn sloshing_first_mode_matches_linear_theory() {
-    // The open tank (L = 1, H = 0.5) is pushed 10 mm sideways and back over 0.6 s (a sin²
-    // pulse, tabulated), then left alone; the free surface sloshes in its first mode,
-    // ω² = g k tanh(kH), k = π/L (linear theory): T = 1.1818 s. Observable: the water's
-    // horizontal centre of mass (smooth, unlike a surface height read off 2 cm particles), whose
-    // crossings of its mean give the period.
-    let text =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("models/tank2d.toml"))
-            .unwrap();
-    let (times, disp): (Vec<String>, Vec<String>) = (0..=12)
-        .map(|k| {
-            let t = 0.05 * k as f64;
-            let d = 0.01 * (std::f64::consts::PI * t / 0.6).sin().powi(2);
-            (format!("{t:?}"), format!("[{d:?}, 0.0]"))
-        })
-        .unzip();
-    let text = text.replace("t_end = 1.0", "t_end = 5.0").replace(
-        r#"shape = { type = "tank", min = [0.0, 0.0], max = [1.0, 0.8] }"#,
-        &format!(
-            "shape = {{ type = \"tank\", min = [0.0, 0.0], max = [1.0, 0.8] }}\nmotion = {{ type = \"table\", time = [{}], displacement = [{}] }}",
-            times.join(", "),
-            disp.join(", ")
-        ),
-    );
-    let case = Case::parse(&text).unwrap();
+    // models/sloshing2d.toml: the open tank (L = 1, H = 0.5) is pushed 10 mm sideways and back
+    // over 0.6 s, then left alone; linear theory ω² = g k tanh(kH), k = π/L: T = 1.1818 s.
+    // Observable: the water's horizontal centre of mass (smooth, unlike a surface height read
+    // off particles), resampled every 5 ms over t ∈ [0.8, 3.5] (two free periods).
+    let case =
+        Case::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("models/sloshing2d.toml")).unwrap();
     let mut sim = case.build::<2>().unwrap();
-    let mut series: Vec<(f64, f64)> = Vec::new();
-    while sim.time < 5.0 {
-        sim.step(5.0 - sim.time).unwrap();
-        if sim.time > 0.8 {
-            let p = &sim.sys.particles;
-            let (mut mx, mut m) = (0.0, 0.0);
-            for i in (0..p.len()).filter(|&i| p.body[i] == 0) {
-                mx += p.mass[i] * p.pos[i][0];
-                m += p.mass[i];
-            }
-            series.push((sim.time, mx / m));
+    let com = |sim: &sphfmu::sim::Simulation<2>| {
+        let p = &sim.sys.particles;
+        let (mut mx, mut m) = (0.0, 0.0);
+        for i in (0..p.len()).filter(|&i| p.body[i] == 0) {
+            mx += p.mass[i] * p.pos[i][0];
+            m += p.mass[i];
         }
+        mx / m
+    };
+    let (t0, dt, t_end) = (0.8, 0.005, 3.5);
+    let mut x: Vec<f64> = Vec::new();
+    let mut prev = (sim.time, com(&sim));
+    while sim.time < t_end {
+        sim.step(t_end - sim.time).unwrap();
+        let now = (sim.time, com(&sim));
+        // linear interpolation onto the uniform grid: the steps are not evenly spaced
+        while t0 + dt * x.len() as f64 <= now.0 {
+            let ts = t0 + dt * x.len() as f64;
+            x.push(prev.1 + (now.1 - prev.1) * (ts - prev.0) / (now.0 - prev.0));
+        }
+        prev = now;
     }
-    let mean = series.iter().map(|s| s.1).sum::<f64>() / series.len() as f64;
-    let crossings: Vec<f64> = series
-        .windows(2)
-        .filter(|w| (w[0].1 < mean) != (w[1].1 < mean))
-        .map(|w| w[0].0 + (w[1].0 - w[0].0) * (w[0].1 - mean) / (w[0].1 - w[1].1))
-        .collect();
+    let (period, damping) = damped_period(&x, dt, 60);
+    let mean = x.iter().sum::<f64>() / x.len() as f64;
+    let amplitude = x.iter().map(|v| (v - mean).abs()).fold(0.0, f64::max);
     let k = std::f64::consts::PI;
     let exact = 2.0 * std::f64::consts::PI / (9.81 * k * (k * 0.5).tanh()).sqrt();
-    let period =
-        2.0 * (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
-    let amplitude = series
-        .iter()
-        .map(|s| (s.1 - mean).abs())
-        .fold(0.0, f64::max);
     println!(
-        "sloshing: {} crossings, amplitude {amplitude:.4} m, period {period:.4} s (linear theory {exact:.4}, {:+.2} %)",
-        crossings.len(),
+        "sloshing: centre-of-mass amplitude {amplitude:.4} m, period {period:.4} s (linear theory {exact:.4}, {:+.2} %), damping rate {damping:.3} /s",
         100.0 * (period / exact - 1.0)
     );
-    assert!(crossings.len() >= 5, "crossings {crossings:?}");
-    // measured −4.27 % (1.1314 s), which is the deep-water period 2π/√(gk) = 1.1318 s: the
-    // water sloshes as if the floor were not there. The issue asks 3 %; open (issue 5). This
-    // bound guards the measured state until the floor's effect is found.
-    assert!((period / exact - 1.0).abs() < 0.05, "period {period}");
+    // a real oscillation (measured amplitude 6.3 mm), not noise
+    assert!(amplitude > 0.003, "amplitude {amplitude}");
+    // measured +0.05 % (Wendland C4 at 1/30 m; with the cubic spline −3.8 %, see the model
+    // file); the issue: 3 %
+    assert!((period / exact - 1.0).abs() < 0.03, "period {period}");
+    let p = &sim.sys.particles;
+    assert!((0..p.len())
+        .filter(|&i| p.body[i] == 0)
+        .all(|i| p.pos[i][0] > 0.0 && p.pos[i][0] < 1.0 && p.pos[i][1] > 0.0));
+}
+
+/// Period and damping rate of a damped oscillation about a constant from evenly spaced
+/// samples (spacing `dt`): the linear prediction x[n+k] = a₁ x[n] + a₂ x[n−k] + c that a
+/// signal c + A rⁿ cos(ωn dt + φ) obeys exactly with a₁ = 2 r^k cos(ωk dt), a₂ = −r^{2k},
+/// fitted by least squares over every n (lag k about a quarter period).
+fn damped_period(x: &[f64], dt: f64, k: usize) -> (f64, f64) {
+    use nalgebra::{Matrix3, Vector3};
+    let (mut a, mut b) = (Matrix3::<f64>::zeros(), Vector3::<f64>::zeros());
+    for n in k..x.len() - k {
+        let row = Vector3::new(x[n], x[n - k], 1.0);
+        a += row * row.transpose();
+        b += row * x[n + k];
+    }
+    let c = a.lu().solve(&b).expect("regular normal equations");
+    let rk = (-c[1]).sqrt();
+    let omega = (c[0] / (2.0 * rk)).acos() / (k as f64 * dt);
+    (
+        2.0 * std::f64::consts::PI / omega,
+        -rk.ln() / (k as f64 * dt),
+    )
 }
 
 /// The open tank to t = 0.5 with δ-SPH density diffusion `delta`: (force/weight and floor
