@@ -16,6 +16,7 @@ mod dambreak;
 mod eos;
 mod frame;
 mod glass;
+mod kernel_choice;
 mod kernels;
 mod lattice;
 mod neighbours;
