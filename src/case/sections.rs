@@ -1,0 +1,190 @@
+//! The case file's tables besides `[scheme]`, `[eos]`, bodies, ports and probes: `[case]`,
+//! `[domain]`, `[kernel]`, `[time]`, `[output]` and the particle regions. Plain serde types;
+//! their range checks are in `validate.rs`.
+
+use crate::domain::BoundaryKind;
+use crate::integrate::IntegratorKind;
+use crate::kernel::KernelName;
+use crate::sim::StepControl;
+use serde::{Deserialize, Serialize};
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CaseInfo {
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    /// 1, 2 or 3.
+    pub dimension: usize,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DomainConfig {
+    pub min: Vec<f64>,
+    pub max: Vec<f64>,
+    /// One per axis: "open", "periodic" or "reflect".
+    pub boundary: Vec<BoundaryKind>,
+    /// Particles within this distance of a non-periodic face are frozen: they keep their
+    /// initial state and position and act as a boundary layer (Rosswog §8.3's noise box).
+    #[serde(default)]
+    pub frozen_margin: f64,
+}
+
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KernelConfig {
+    /// Default: the scheme's kernel (cubic spline; Wendland C6 for Rosswog F1–F3).
+    pub name: Option<KernelName>,
+    /// h = η (m/ρ)^{1/D}; default: the kernel's recommended η.
+    pub eta: Option<f64>,
+    /// Exponent of the sinc family (3..9).
+    pub sinc_n: Option<u32>,
+    /// Cap on h; default: a quarter of the largest box side.
+    pub h_max: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeConfig {
+    pub t_end: f64,
+    /// Default: the scheme's integrator (leapfrog; SSP-RK3 for Rosswog presets).
+    pub integrator: Option<IntegratorKind>,
+    /// Default: the scheme's Courant factor (0.3; 0.5 for Rosswog presets).
+    pub cfl: Option<f64>,
+    #[serde(default = "default_cfl_accel")]
+    pub cfl_accel: f64,
+    #[serde(default = "default_dt_min")]
+    pub dt_min: f64,
+    pub dt_max: Option<f64>,
+    #[serde(default = "default_max_steps")]
+    pub max_steps: u64,
+}
+
+fn default_cfl_accel() -> f64 {
+    StepControl::default().cfl_accel
+}
+fn default_dt_min() -> f64 {
+    1e-10
+}
+fn default_max_steps() -> u64 {
+    10_000_000
+}
+
+/// Snapshot file formats.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SnapshotFormat {
+    Vtu,
+    Csv,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputConfig {
+    /// Simulation-time interval between snapshots (0: initial and final only).
+    #[serde(default)]
+    pub snapshot_every: f64,
+    #[serde(default = "default_formats")]
+    pub formats: Vec<SnapshotFormat>,
+    /// Write a diagnostics row every this many steps (≥ 1).
+    #[serde(default = "default_diag_every")]
+    pub diagnostics_every: u64,
+}
+
+fn default_formats() -> Vec<SnapshotFormat> {
+    vec![SnapshotFormat::Vtu, SnapshotFormat::Csv]
+}
+fn default_diag_every() -> u64 {
+    1
+}
+
+impl Default for OutputConfig {
+    fn default() -> Self {
+        Self {
+            snapshot_every: 0.0,
+            formats: default_formats(),
+            diagnostics_every: 1,
+        }
+    }
+}
+
+/// Lattice of a region.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Lattice {
+    /// Simple cubic (square in 2D).
+    Cubic,
+    /// Hexagonal close packing in 2D; HCP (ABAB stacking of hexagonal layers) in 3D.
+    Hexagonal,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Shape {
+    Box,
+    Sphere,
+}
+
+/// A uniform region of fluid filled with a lattice. Later regions replace earlier ones where
+/// they overlap.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Region {
+    #[serde(default = "default_shape")]
+    pub shape: Shape,
+    /// Box corners (shape = "box"); default: the whole domain.
+    pub min: Option<Vec<f64>>,
+    pub max: Option<Vec<f64>>,
+    /// Sphere (disk in 2D) centre and radius (shape = "sphere").
+    pub center: Option<Vec<f64>>,
+    pub radius: Option<f64>,
+    #[serde(default = "default_lattice")]
+    pub lattice: Lattice,
+    /// Nearest-neighbour spacing; exactly one of `spacing` and `particle_mass`.
+    pub spacing: Option<f64>,
+    pub particle_mass: Option<f64>,
+    pub density: f64,
+    /// Exactly one of `pressure` and `internal_energy`.
+    pub pressure: Option<f64>,
+    pub internal_energy: Option<f64>,
+    pub velocity: Option<Vec<f64>>,
+    /// Extra radial velocity v_r·(x − radial_center)/|x − radial_center| (e.g. Noh: −1).
+    pub radial_velocity: Option<f64>,
+    pub radial_center: Option<Vec<f64>>,
+    /// Gresho–Chan vortex (2D): adds its velocity and its pressure profile (replacing
+    /// `pressure`; ρ stays `density`).
+    pub gresho: Option<crate::verify::vortex::Gresho>,
+    #[serde(default)]
+    pub material: u16,
+    /// Add the hydrostatic pressure ρ|g|·depth below the region's top (against `gravity`) to
+    /// `pressure`, with the density from the EOS at that pressure (particle masses follow).
+    #[serde(default)]
+    pub hydrostatic: bool,
+}
+
+fn default_shape() -> Shape {
+    Shape::Box
+}
+fn default_lattice() -> Lattice {
+    Lattice::Cubic
+}
+
+/// A planar interface between regions, smoothed over `width` with a logistic profile
+/// f = f_lo + (f_hi − f_lo)/(1 + exp(−(x − position)/width)) (CRKSPH spec §9.4, sign fixed).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Interface {
+    pub axis: usize,
+    pub position: f64,
+    pub width: f64,
+}
+
+/// Random displacement of every particle by up to `amplitude` × its lattice spacing.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Perturbation {
+    pub amplitude: f64,
+    #[serde(default)]
+    pub seed: u64,
+}

@@ -1,0 +1,308 @@
+//! Range checks of a parsed case: every error names the key and the allowed range.
+
+use super::*;
+
+impl Case {
+    /// Range checks of every field.
+    pub fn validate(&self) -> Result<(), CaseError> {
+        let d = self.case.dimension;
+        if !(1..=3).contains(&d) {
+            return Err(CaseError(format!(
+                "case.dimension: must be 1, 2 or 3, got {d}"
+            )));
+        }
+        self.vec_len("domain.min", &self.domain.min)?;
+        self.vec_len("domain.max", &self.domain.max)?;
+        if self.domain.boundary.len() != d {
+            return Err(CaseError(format!(
+                "domain.boundary: must have {d} entries (one per axis: open, periodic, reflect), got {}",
+                self.domain.boundary.len()
+            )));
+        }
+        for k in 0..d {
+            if self.domain.max[k] <= self.domain.min[k] {
+                return Err(CaseError(format!(
+                    "domain.max[{k}]: must be greater than domain.min[{k}] = {}, got {}",
+                    self.domain.min[k], self.domain.max[k]
+                )));
+            }
+        }
+        let fm = self.domain.frozen_margin;
+        if !(fm.is_finite() && fm >= 0.0) {
+            return Err(CaseError(format!(
+                "domain.frozen_margin: must be a finite number ≥ 0, got {fm}"
+            )));
+        }
+        self.eos.validate()?;
+        let eta = self.eta()?;
+        if !(eta.is_finite() && (0.5..=5.0).contains(&eta)) {
+            return Err(CaseError(format!(
+                "kernel.eta: must be in [0.5, 5], got {eta}"
+            )));
+        }
+        if let Some(h) = self.kernel.h_max {
+            if !(h.is_finite() && h > 0.0) {
+                return Err(CaseError(format!(
+                    "kernel.h_max: must be a finite number > 0, got {h}"
+                )));
+            }
+        }
+        self.scheme.validate()?;
+        if matches!(self.scheme, SchemeConfig::Psph(_))
+            && !matches!(self.eos, EosConfig::IdealGas { .. })
+        {
+            return Err(CaseError(
+                "scheme.name: \"psph\" sums the pressure from u and needs eos.type = \"ideal-gas\""
+                    .into(),
+            ));
+        }
+        // rpSPH's force sees pressure differences only (Abel 2011 eq. 4) and is not
+        // antisymmetric: the load on a body would miss the ambient pressure and not be the
+        // reaction of what the fluid receives (measured: a closed tank read −0.05 of its weight)
+        if matches!(self.scheme, SchemeConfig::Rpsph(_)) && !self.bodies.is_empty() {
+            return Err(CaseError(
+                "scheme.name: \"rpsph\" feels pressure differences only, so it gives no load on a [[body]]; use standard, rosswog-f1…f4, crksph, compsph, compsph-cullen or psph with bodies".into(),
+            ));
+        }
+        let t = &self.time;
+        let pos = |key: &str, v: f64| -> Result<(), CaseError> {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(CaseError(format!(
+                    "{key}: must be a finite number > 0, got {v}"
+                )))
+            }
+        };
+        pos("time.t_end", t.t_end)?;
+        let cfl = self.cfl();
+        if !(cfl > 0.0 && cfl <= 1.0) {
+            return Err(CaseError(format!(
+                "time.cfl: must be in (0, 1], got {}",
+                cfl
+            )));
+        }
+        if !(t.cfl_accel > 0.0 && t.cfl_accel <= 1.0) {
+            return Err(CaseError(format!(
+                "time.cfl_accel: must be in (0, 1], got {}",
+                t.cfl_accel
+            )));
+        }
+        pos("time.dt_min", t.dt_min)?;
+        if let Some(m) = t.dt_max {
+            pos("time.dt_max", m)?;
+        }
+        if t.max_steps == 0 {
+            return Err(CaseError("time.max_steps: must be ≥ 1, got 0".into()));
+        }
+        let o = &self.output;
+        if !(o.snapshot_every.is_finite() && o.snapshot_every >= 0.0) {
+            return Err(CaseError(format!(
+                "output.snapshot_every: must be ≥ 0 (0 = initial and final only), got {}",
+                o.snapshot_every
+            )));
+        }
+        if o.diagnostics_every == 0 {
+            return Err(CaseError(
+                "output.diagnostics_every: must be ≥ 1, got 0".into(),
+            ));
+        }
+        if self.regions.is_empty() {
+            return Err(CaseError(
+                "region: at least one [[region]] is required".into(),
+            ));
+        }
+        for (i, r) in self.regions.iter().enumerate() {
+            self.validate_region(i, r)?;
+        }
+        for (i, f) in self.interfaces.iter().enumerate() {
+            if f.axis >= d {
+                return Err(CaseError(format!(
+                    "interface[{i}].axis: must be in [0, {}], got {}",
+                    d - 1,
+                    f.axis
+                )));
+            }
+            if !f.position.is_finite() {
+                return Err(CaseError(format!(
+                    "interface[{i}].position: must be finite"
+                )));
+            }
+            pos(&format!("interface[{i}].width"), f.width)?;
+        }
+        if let Some(p) = &self.perturbation {
+            if !(p.amplitude.is_finite() && (0.0..=0.5).contains(&p.amplitude)) {
+                return Err(CaseError(format!(
+                    "perturbation.amplitude: must be in [0, 0.5] (fraction of the lattice spacing), got {}",
+                    p.amplitude
+                )));
+            }
+        }
+        if let Some(g) = &self.gravity {
+            self.vec_len("gravity", g)?;
+        }
+        if let Some(g) = &self.glass {
+            g.validate()?;
+        }
+        if let Some(v) = &self.verify {
+            v.validate(self)?;
+        }
+        if let Some(b) = &self.blast {
+            b.validate(self)?;
+        }
+        for (i, b) in self.bodies.iter().enumerate() {
+            b.validate(i, self)?;
+        }
+        for (i, p) in self.ports.iter().enumerate() {
+            p.validate(i, self)?;
+        }
+        if let Some(f) = &self.frame {
+            f.validate(self.dimension()).map_err(CaseError)?;
+        }
+        self.validate_probes()?;
+        Ok(())
+    }
+
+    fn validate_region(&self, i: usize, r: &Region) -> Result<(), CaseError> {
+        let key = |s: &str| format!("region[{i}].{s}");
+        if r.hydrostatic && (self.gravity.is_none() || r.pressure.is_none()) {
+            return Err(CaseError(format!(
+                "{}: needs `gravity` and {} (the pressure at the region's top)",
+                key("hydrostatic"),
+                key("pressure")
+            )));
+        }
+        let pos = |k: &str, v: f64| -> Result<(), CaseError> {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(CaseError(format!(
+                    "{}: must be a finite number > 0, got {v}",
+                    key(k)
+                )))
+            }
+        };
+        match r.shape {
+            Shape::Box => {
+                if r.center.is_some() || r.radius.is_some() {
+                    return Err(CaseError(format!(
+                        "{}: only for shape = \"sphere\"",
+                        key("center/radius")
+                    )));
+                }
+                if let Some(m) = &r.min {
+                    self.vec_len(&key("min"), m)?;
+                }
+                if let Some(m) = &r.max {
+                    self.vec_len(&key("max"), m)?;
+                }
+                let (lo, hi) = self.region_box(r);
+                for k in 0..self.case.dimension {
+                    if hi[k] <= lo[k] {
+                        return Err(CaseError(format!(
+                            "{}: must exceed min[{k}] = {}, got {}",
+                            key(&format!("max[{k}]")),
+                            lo[k],
+                            hi[k]
+                        )));
+                    }
+                }
+            }
+            Shape::Sphere => {
+                let c = r.center.as_ref().ok_or_else(|| {
+                    CaseError(format!(
+                        "{}: required for shape = \"sphere\"",
+                        key("center")
+                    ))
+                })?;
+                self.vec_len(&key("center"), c)?;
+                pos(
+                    "radius",
+                    r.radius.ok_or_else(|| {
+                        CaseError(format!(
+                            "{}: required for shape = \"sphere\"",
+                            key("radius")
+                        ))
+                    })?,
+                )?;
+            }
+        }
+        match (r.spacing, r.particle_mass) {
+            (Some(s), None) => pos("spacing", s)?,
+            (None, Some(m)) => pos("particle_mass", m)?,
+            _ => {
+                return Err(CaseError(format!(
+                    "{}: give exactly one of spacing and particle_mass",
+                    key("spacing")
+                )))
+            }
+        }
+        pos("density", r.density)?;
+        match (r.pressure, r.internal_energy) {
+            (Some(p), None) => {
+                if !(p.is_finite() && p >= 0.0) {
+                    return Err(CaseError(format!(
+                        "{}: must be a finite number ≥ 0, got {p}",
+                        key("pressure")
+                    )));
+                }
+            }
+            (None, Some(u)) => {
+                if !(u.is_finite() && u >= 0.0) {
+                    return Err(CaseError(format!(
+                        "{}: must be a finite number ≥ 0, got {u}",
+                        key("internal_energy")
+                    )));
+                }
+            }
+            _ => {
+                return Err(CaseError(format!(
+                    "{}: give exactly one of pressure and internal_energy",
+                    key("pressure")
+                )))
+            }
+        }
+        if let Some(v) = &r.velocity {
+            self.vec_len(&key("velocity"), v)?;
+        }
+        if let Some(v) = r.radial_velocity {
+            if !v.is_finite() {
+                return Err(CaseError(format!(
+                    "{}: must be finite",
+                    key("radial_velocity")
+                )));
+            }
+        }
+        if let Some(c) = &r.radial_center {
+            self.vec_len(&key("radial_center"), c)?;
+        }
+        if let Some(g) = &r.gresho {
+            if self.case.dimension != 2 {
+                return Err(CaseError(format!(
+                    "{}: only in 2D (case.dimension = 2)",
+                    key("gresho")
+                )));
+            }
+            g.validate(&key("gresho"))?;
+        }
+        Ok(())
+    }
+
+    /// The box a region fills (its own corners, else the domain).
+    pub(crate) fn region_box(&self, r: &Region) -> (Vec<f64>, Vec<f64>) {
+        match r.shape {
+            Shape::Box => (
+                r.min.clone().unwrap_or_else(|| self.domain.min.clone()),
+                r.max.clone().unwrap_or_else(|| self.domain.max.clone()),
+            ),
+            Shape::Sphere => {
+                let c = r.center.clone().unwrap_or_default();
+                let rad = r.radius.unwrap_or(0.0);
+                (
+                    c.iter().map(|x| x - rad).collect(),
+                    c.iter().map(|x| x + rad).collect(),
+                )
+            }
+        }
+    }
+}
