@@ -132,3 +132,17 @@ def test_a_peer_that_disappears_and_comes_back(on_stale):
         assert st[-1] == "ok"
     # back: the new live value (3 g) drives the solver again; measured 3.02
     assert abs(mean(len(f) - 4, len(f)) / 3 - 1) < 0.1
+
+
+def test_two_live_instances_in_one_process_keep_apart():
+    r = session("two_live_instances", fmu_path=str(SLOSH3))
+    print("two instances: force/weight", r["ratio"], "third:", r["third"], r["log"][-3:])
+    # each publishes every step under its own prefix, the value its getter returns
+    assert r["received"] == {"a": 20, "b": 20}
+    assert r["last_equal"] == {"a": True, "b": True}
+    # the live 2 g went to a only (mean of the last 8 steps, two periods of the ringing column;
+    # measured 2.018 and 1.002)
+    assert abs(r["ratio"]["a"] / 2 - 1) < 0.05 and abs(r["ratio"]["b"] - 1) < 0.05
+    # a third instance asking for a's port: its initialisation fails, the log says why
+    assert r["third"].startswith("error")
+    assert any("zenoh.listen" in m for m in r["log"]), r["log"]

@@ -29,12 +29,13 @@ def free_port():
         return s.getsockname()[1]
 
 
-def peer(port):
+def peer(*ports):
+    """A zenoh peer connected to the listeners on these loopback ports."""
     conf = zenoh.Config()
     conf.insert_json5("mode", '"peer"')
     conf.insert_json5("scouting/multicast/enabled", "false")
     conf.insert_json5("scouting/gossip/enabled", "false")
-    conf.insert_json5("connect/endpoints", json.dumps([f"tcp/127.0.0.1:{port}"]))
+    conf.insert_json5("connect/endpoints", json.dumps([f"tcp/127.0.0.1:{p}" for p in ports]))
     return zenoh.open(conf)
 
 
@@ -61,8 +62,8 @@ def query(session, key, request=None, timeout=60.0, raw=False):
     raise RuntimeError(f"{key}: no reply")
 
 
-def live_fmu(path, port, prefix, staleness=1.0, on_stale="hold"):
-    fmu, vr = open_fmu(path, init=False)
+def live_fmu(path, port, prefix, staleness=1.0, on_stale="hold", name="t"):
+    fmu, vr = open_fmu(path, name=name, init=False)
     fmu.setDebugLogging(True, ["logEvents", "logStatusWarning", "logStatusError"])
     fmu.enterInitializationMode(startTime=0.0)
     fmu.setInt64([vr["threads"]], [2])
@@ -350,6 +351,59 @@ def session_peer_gone_and_back(fmu_path, port, prefix, on_stale):
         "statuses": statuses,
         "gone": [gone_from, gone_to],
         "log": [(int(s), c, m) for s, c, m in LOG],
+    }
+
+
+def session_two_live_instances(fmu_path, port, prefix):
+    """Two FMU instances in one process, each with its own zenoh session, prefix and port: a
+    live gravity sent to one reaches that one only, each publishes under its own prefix; a
+    third that asks for a port already taken fails its initialisation with a logged reason."""
+    port_b = free_port()
+    inst = {"a": live_fmu(fmu_path, port, f"{prefix}/a", name="a"),
+            "b": live_fmu(fmu_path, port_b, f"{prefix}/b", name="b")}
+    got = {"a": [], "b": []}
+    fy = {"a": [], "b": []}
+    with peer(port, port_b) as s:
+        subs = [s.declare_subscriber(f"{prefix}/{k}/out/tank.force",
+                                     lambda smp, k=k: got[k].append(cbor2.loads(smp.payload.to_bytes())))
+                for k in inst]
+        for k in inst:
+            wait_for(s, f"{prefix}/{k}/snapshot")
+        s.put(f"{prefix}/a/in/gravity", cbor2.dumps([0.0, -2 * G]))
+        time.sleep(0.3)
+        t, h = 0.0, 0.02
+        for _ in range(20):
+            for k, (fmu, vr) in inst.items():
+                fmu.doStep(t, h)
+                fy[k].append(fmu.getFloat64([vr["tank.force"]], nValues=3)[1])
+            t += h
+        deadline = time.time() + 5
+        while min(len(g) for g in got.values()) < 20 and time.time() < deadline:
+            time.sleep(0.05)
+        for sub in subs:
+            sub.undeclare()
+    LOG.clear()
+    c, vr = open_fmu(fmu_path, name="c", init=False)
+    c.setDebugLogging(True, ["logEvents", "logStatusWarning", "logStatusError"])
+    c.enterInitializationMode(startTime=0.0)
+    for key, v in [("zenoh.mode", "peer"), ("zenoh.listen", f"tcp/127.0.0.1:{port}")]:
+        c.setString([vr[key]], [v])
+    try:
+        c.exitInitializationMode()
+        third = "initialised"
+    except Exception as e:  # noqa: BLE001 - fmpy raises on an error status
+        third = f"error: {e}"
+    c.freeInstance()
+    for fmu, _ in inst.values():
+        fmu.terminate()
+        fmu.freeInstance()
+    weight = 1000 * G * 0.5
+    return {
+        "received": {k: len(g) for k, g in got.items()},
+        "last_equal": {k: bool(got[k][-1]["v"][1] == fy[k][-1]) for k in inst},
+        "ratio": {k: float(-np.mean(fy[k][-8:]) / weight) for k in inst},
+        "third": third,
+        "log": [m for _, _, m in LOG],
     }
 
 
