@@ -4,7 +4,10 @@
    the tank force (request, reply; no stepping), and a full exchange `set` gravity + `step`
    0.0005 s (about one internal step) + `get` the force — median and 99th percentile;
 2. what publishing adds to a step: the slosh2d FMU stepped by fmpy with the bridge off and on
-   (a subscriber receiving every output), the median wall time per doStep of each.
+   (a subscriber receiving every output), the median wall time per doStep of each;
+3. what a master pays to read every output after a step (fmpy getters, bridge off): the FMU
+   sweeps the particles once per kind of output (probes, patches, markers, diagnostics) and
+   answers the other outputs of that kind from it until the next change.
 
     target/venv/bin/python tools/bench_zenoh.py [--json target/bench-zenoh.json] [--n 1000]
 """
@@ -88,26 +91,36 @@ def step_times(live, steps, h):
     if live:
         sub = s.declare_subscriber("bench/fmu/out/**", lambda smp: got.__setitem__(0, got[0] + 1))
         time.sleep(1.0)
-    times, t = [], 0.0
+    outputs = output_variables()
+    times, reads, t = [], [], 0.0
     for k in range(steps):
         t0 = time.perf_counter()
         fmu.doStep(t, h)
         times.append(time.perf_counter() - t0)
         t += h
-    outputs = len(output_names())
+        if not live:
+            t0 = time.perf_counter()
+            for vr_k, kind, size in outputs:
+                if kind == "Int64":
+                    fmu.getInt64([vr_k])
+                else:
+                    fmu.getFloat64([vr_k], nValues=size)
+            reads.append(time.perf_counter() - t0)
     fmu.terminate()
     fmu.freeInstance()
     if live:
         time.sleep(0.5)
         sub.undeclare()
         s.close()
-    return stats(times), got[0], outputs
+    return stats(times), got[0], len(outputs), stats(reads) if reads else None
 
 
-def output_names():
+def output_variables():
+    """(value reference, type, number of values) of every output."""
     from fmpy import read_model_description
     md = read_model_description(str(FMU))
-    return [v.name for v in md.modelVariables if v.causality == "output"]
+    return [(v.valueReference, v.type, int(v.dimensions[0].start) if v.dimensions else 1)
+            for v in md.modelVariables if v.causality == "output"]
 
 
 def main():
@@ -118,13 +131,14 @@ def main():
     a = ap.parse_args()
     get, full = node_round_trips(a.n)
     h = 0.0005
-    off, _, n_out = step_times(False, a.steps, h)
-    on, received, _ = step_times(True, a.steps, h)
+    off, _, n_out, reads = step_times(False, a.steps, h)
+    on, received, _, _ = step_times(True, a.steps, h)
     res = {
         "node_get_round_trip": get,
         "node_set_step_get_round_trip": full,
         "fmu_doStep_bridge_off": off,
         "fmu_doStep_bridge_on": on,
+        "fmu_read_all_outputs_after_doStep": reads,
         "outputs_per_step": n_out,
         "samples_received": received,
         "publish_overhead_ms": on["median_ms"] - off["median_ms"],
@@ -139,6 +153,7 @@ def main():
     print(f"| node: set + step {h} s + get | {full['median_ms']:.3f} ms | {full['p99_ms']:.3f} ms |")
     print(f"| FMU doStep {h} s, bridge off | {off['median_ms']:.3f} ms | {off['p99_ms']:.3f} ms |")
     print(f"| FMU doStep {h} s, bridge on ({n_out} outputs published) | {on['median_ms']:.3f} ms | {on['p99_ms']:.3f} ms |")
+    print(f"| FMU: read all {n_out} outputs after a doStep (fmpy getters) | {reads['median_ms']:.3f} ms | {reads['p99_ms']:.3f} ms |")
     print(f"publishing adds {res['publish_overhead_ms']:.3f} ms per step (median); "
           f"the subscriber received {received} samples; {a.steps * n_out} were published after it "
           "connected (every output after each step)")

@@ -15,6 +15,7 @@ pub mod fmi3;
 pub mod inputs;
 mod live;
 pub mod model;
+mod solver;
 pub mod state_ffi;
 pub mod table;
 pub mod units;

@@ -134,7 +134,7 @@ impl Instance {
             }
             let particles = self
                 .coupling
-                .as_ref()
+                .get()
                 .map(|c| c.particles(1))
                 .unwrap_or_default();
             let t = self.time();

@@ -77,7 +77,7 @@ pub struct Instance {
     pub table: Table,
     pub(crate) params: Params,
     pub(crate) inputs: Inputs,
-    pub(crate) coupling: Option<Coupling>,
+    pub(crate) coupling: crate::solver::Solver,
     /// The zenoh bridge while live coupling is on (`zenoh.mode`).
     #[cfg(feature = "zenoh")]
     pub(crate) bridge: Option<crate::bridge::Bridge>,
@@ -133,7 +133,7 @@ impl Instance {
             table,
             params,
             inputs,
-            coupling: None,
+            coupling: Default::default(),
             #[cfg(feature = "zenoh")]
             bridge: None,
             output: Output::default(),
@@ -202,7 +202,7 @@ impl Instance {
         self.output = Output::default();
         self.write_output()?;
         self.publish_live();
-        let c = self.coupling.as_ref().expect("built above");
+        let c = self.coupling.get().expect("built above");
         let d = c.diagnostics();
         self.log(
             Status::Ok,
@@ -244,13 +244,13 @@ impl Instance {
             threads: p.threads as usize,
         };
         let c = Coupling::new(&case, &options).map_err(|e| (Status::Error, e.0))?;
-        self.coupling = Some(c);
+        self.coupling.put(Some(c));
         Ok(())
     }
 
     /// Hand the inputs to the solver (it ignores unchanged values).
     pub(crate) fn apply_inputs(&mut self) -> CallResult<()> {
-        let c = self.coupling.as_mut().expect("coupling built");
+        let c = self.coupling.get_mut().expect("coupling built");
         c.set_gravity(self.inputs.gravity)
             .map_err(|e| (Status::Error, e.0))?;
         for (k, &b) in self.table.external_bodies.iter().enumerate() {
@@ -265,7 +265,7 @@ impl Instance {
     }
 
     pub fn time(&self) -> f64 {
-        self.start_time + self.coupling.as_ref().map(|c| c.time()).unwrap_or(0.0)
+        self.start_time + self.coupling.get().map(|c| c.time()).unwrap_or(0.0)
     }
 
     pub fn do_step(&mut self, current: f64, h: f64) -> CallResult<()> {
@@ -283,7 +283,10 @@ impl Instance {
         }
         self.apply_inputs_live()?;
         let target = current + h - self.start_time;
-        let c = self.coupling.as_mut().expect("coupling built in step mode");
+        let c = self
+            .coupling
+            .get_mut()
+            .expect("coupling built in step mode");
         match c.step_to(target) {
             Ok(r) => {
                 let msg = format!(
@@ -311,7 +314,7 @@ impl Instance {
     /// failure is a warning (the simulation itself is fine).
     fn write_output(&mut self) -> CallResult<()> {
         let dir = self.params.output_dir.trim();
-        let Some(c) = &self.coupling else {
+        let Some(c) = self.coupling.get() else {
             return Ok(());
         };
         // (the output time may be missed by a rounding of the master's time grid)
@@ -345,7 +348,7 @@ impl Instance {
 
     /// Back to the state after instantiation: start values, no solver.
     pub fn reset(&mut self) {
-        self.coupling = None;
+        self.coupling.put(None);
         self.close_live();
         self.params = Params::start(match &self.table.variables[1].start {
             Start::Text(t) => t.clone(),
@@ -361,7 +364,7 @@ impl Instance {
     // ---- FMU state ---------------------------------------------------------------------
 
     pub fn get_state(&self) -> CallResult<Snapshot> {
-        let Some(c) = &self.coupling else {
+        let Some(c) = self.coupling.get() else {
             return err(
                 "getFMUState: available once initialisation has ended (no solver state yet)",
             );
@@ -386,7 +389,7 @@ impl Instance {
                 "setFMUState: the state belongs to another model (body or port inputs differ)",
             );
         }
-        let c = self.coupling.as_mut().expect("built above");
+        let c = self.coupling.get_mut().expect("built above");
         c.restore(&s.solver)
             .map_err(|e| (Status::Error, format!("setFMUState: {}", e.0)))?;
         self.inputs = s.inputs.clone();

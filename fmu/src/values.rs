@@ -12,7 +12,7 @@ impl Instance {
         let r = f(self);
         if r.is_err() {
             if self.params != params {
-                self.coupling = None;
+                self.coupling.put(None);
             }
             self.params = params;
             self.inputs = inputs;
@@ -57,7 +57,7 @@ impl Instance {
                     return err(format!("resolution: must be in [0.1, 10], got {r}"));
                 }
                 self.params.resolution = r;
-                self.coupling = None;
+                self.coupling.put(None);
             }
             Binding::Param(Param::OutputInterval) => {
                 let dt = values[0];
@@ -79,7 +79,7 @@ impl Instance {
                     ));
                 }
                 self.params.cfl = c;
-                self.coupling = None;
+                self.coupling.put(None);
             }
             Binding::Gravity => {
                 let mut g = self.inputs.gravity;
@@ -122,7 +122,7 @@ impl Instance {
                     return err(format!("threads: must be in [0, 1024], got {value}"));
                 }
                 self.params.threads = value;
-                self.coupling = None;
+                self.coupling.put(None);
                 Ok(())
             }
             _ => err(format!("{}: cannot be set", self.table.variables[i].name)),
@@ -152,7 +152,7 @@ impl Instance {
             }
             _ => return err(format!("{}: cannot be set", self.table.variables[i].name)),
         }
-        self.coupling = None;
+        self.coupling.put(None);
         Ok(())
     }
 
@@ -195,9 +195,9 @@ impl Instance {
             ));
         }
         self.ensure_coupling()?;
-        let c = self.coupling.as_ref().expect("built above");
+        let mut c = self.coupling.outputs().expect("built above");
         let b = self.table.variables[i].binding;
-        let d = || c.diagnostics();
+        let mut d = || c.diagnostics();
         Ok(match b {
             Binding::BodyForce(k) => c.loads()[k].force.to_vec(),
             Binding::BodyTorque(k) => c.loads()[k].torque.to_vec(),
