@@ -1,11 +1,11 @@
 //! Boundary bodies (issue 5, first part): wall particles with the Adami et al. (2012) wall
 //! condition carry a liquid at rest; the load on the body is the reaction of the pair forces.
 
+use crate::common;
 use sphfmu::case::Case;
-use std::path::Path;
 
 fn closed_tank() -> Case {
-    Case::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("models/closed-tank2d.toml")).unwrap()
+    Case::load(&common::model_path("closed-tank2d.toml")).unwrap()
 }
 
 #[test]
@@ -55,10 +55,7 @@ fn a_closed_tank_carries_the_weight_of_its_water() {
 
 #[test]
 fn bad_bodies_are_clear_errors() {
-    let base = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("models/closed-tank2d.toml"),
-    )
-    .unwrap();
+    let base = common::model_text("closed-tank2d.toml");
     let cases = [
         // a block in the middle of the water
         (
@@ -95,7 +92,7 @@ motion = { type = "sinusoid", amplitude = [0.01, nan], frequency = 1.0 }"#,
 
 #[test]
 fn a_slow_piston_feels_the_adiabatic_pressure() {
-    let worst = gas_spring_worst_deviation(&model_text("piston2d.toml"));
+    let worst = gas_spring_worst_deviation(&common::model_text("piston2d.toml"));
     println!("gas spring: largest deviation from P0 (L0/L)^γ A over one period {worst:.4}");
     // measured 0.72 % (every step after t = 0.5; Wendland C4, models/piston2d.toml). Most of
     // it is physics the adiabatic law leaves out: the gas column accelerates with the piston,
@@ -103,16 +100,6 @@ fn a_slow_piston_feels_the_adiabatic_pressure() {
     // turning points); the one-second means of the deviation follow that term within 0.2 %.
     // The issue: 1 % at all phases.
     assert!(worst < 0.01, "deviation {worst}");
-}
-
-/// The text of `models/<name>`.
-pub(crate) fn model_text(name: &str) -> String {
-    std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("models")
-            .join(name),
-    )
-    .unwrap()
 }
 
 /// The gas spring (models/piston2d.toml as `text`) over its 20 s period: the largest relative
@@ -152,8 +139,7 @@ fn wall_layer_pressure(sim: &sphfmu::sim::Simulation<2>, y: f64) -> f64 {
 #[test]
 fn an_open_tank_carries_its_water_and_follows_doubled_gravity() {
     // Continuity density, free surface at P = 0 (models/tank2d.toml); gravity doubles at t = 0.5.
-    let case =
-        Case::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("models/tank2d.toml")).unwrap();
+    let case = Case::load(&common::model_path("tank2d.toml")).unwrap();
     let mut sim = case.build::<2>().unwrap();
     let mass = sim.diagnostics().mass;
     let mean_rho = {
@@ -234,7 +220,7 @@ fn fluid_momentum_change_and_body_impulse_balance_to_round_off() {
 
 #[test]
 fn sloshing_first_mode_matches_linear_theory() {
-    let s = sloshing(&model_text("sloshing2d.toml"));
+    let s = sloshing(&common::model_text("sloshing2d.toml"));
     println!(
         "sloshing: centre-of-mass amplitude {:.4} m, period / linear theory {:.4}, damping rate {:.3} /s",
         s.amplitude, s.period_ratio, s.damping
@@ -330,13 +316,10 @@ fn damped_period(x: &[f64], dt: f64, k: usize) -> (f64, f64) {
 /// The open tank to t = 0.5 with δ-SPH density diffusion `delta`: (force/weight and floor
 /// pressure / exact, averaged over t ∈ [0.1, 0.5]; r.m.s. fluid speed at the end).
 fn open_tank_with_delta(delta: f64) -> (f64, f64, f64) {
-    let text =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("models/tank2d.toml"))
-            .unwrap()
-            .replace(
-                "density = \"continuity\"",
-                &format!("density = \"continuity\"\ndelta = {delta}"),
-            );
+    let text = common::model_text("tank2d.toml").replace(
+        "density = \"continuity\"",
+        &format!("density = \"continuity\"\ndelta = {delta}"),
+    );
     let case = Case::parse(&text).unwrap();
     let mut sim = case.build::<2>().unwrap();
     let mass = sim.diagnostics().mass;
@@ -379,8 +362,8 @@ fn a_3d_open_tank_carries_its_water_and_follows_doubled_gravity() {
     // η = 1.3 rather than the cubic spline's 1.2: standard SPH's pressure gradient on a cubic
     // lattice is the exact one times the lattice sum M = −Σ_b V_b x_b ∂W/∂x(x_b) (Rosswog's
     // Q4 in 3D), and the water settles where that gradient balances gravity, so its pressure
-    // reads 1/M − 1 high: M = 0.9817 at η = 1.2 (+1.86 %, tests/kernel_choice.rs), 0.9935 at
-    // η = 1.3.
+    // reads 1/M − 1 high: M = 0.9817 at η = 1.2 (1/M − 1 = +1.87 %, floor +2.04 %:
+    // tests/kernel_choice.rs), 0.9935 at η = 1.3.
     let (phases, inside) = open_tank_3d("eta = 1.3", true);
     let excess = 1.0 / cubic_lattice_gradient_moment(1.3) - 1.0;
     for (g, f, pf) in phases {

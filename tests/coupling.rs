@@ -1,18 +1,9 @@
 //! The Coupling interface (issue 5): inputs, stepping to a time, loads, probes and markers,
 //! save / restore bit for bit, and bad inputs that change nothing.
 
+use crate::common;
 use sphfmu::case::Case;
 use sphfmu::coupling::{BodyKinematics, Coupling, CouplingOptions, PatchValue, ProbeValue};
-use std::path::Path;
-
-fn model_text(name: &str) -> String {
-    std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("models")
-            .join(name),
-    )
-    .unwrap()
-}
 
 fn options() -> CouplingOptions {
     CouplingOptions {
@@ -134,7 +125,7 @@ fn save_and_restore_continue_bit_for_bit_with_every_scheme_family() {
 
 #[test]
 fn save_and_restore_are_exact_with_bodies_driven_from_outside() {
-    let case = Case::parse(&model_text("free-piston2d.toml")).unwrap();
+    let case = Case::parse(&common::model_text("free-piston2d.toml")).unwrap();
     // the master's inputs are a function of time only, as a deterministic master's are
     save_restore_is_exact("free piston", &case, |c, t| {
         let piston = c.body_index("piston").unwrap();
@@ -158,11 +149,11 @@ fn save_and_restore_are_exact_in_a_moving_frame_and_with_wall_pair_schemes() {
     // tank with Rosswog F1 (wall–wall pairs kept in its lists)
     let framed = format!(
         "{}\n[frame]\nmotion = {{ type = \"sinusoid\", amplitude = [0.01, 0.0], angle_amplitude = 0.05, frequency = 1.5 }}\nreference = [0.5, 0.25]\n",
-        model_text("closed-tank2d.toml")
+        common::model_text("closed-tank2d.toml")
     );
     let case = Case::parse(&framed).unwrap();
     save_restore_is_exact("moving frame", &case, |_, _| {});
-    let case = Case::parse(&model_text("closed-tank2d.toml"))
+    let case = Case::parse(&common::model_text("closed-tank2d.toml"))
         .unwrap()
         .with_scheme("rosswog-f1")
         .unwrap();
@@ -173,7 +164,7 @@ fn save_and_restore_are_exact_in_a_moving_frame_and_with_wall_pair_schemes() {
 fn a_free_piston_driven_by_a_master_oscillates_at_the_gas_spring_frequency() {
     // The master integrates M ẍ = F − P0 A with symplectic Euler at the communication step
     // and sends position and velocity back (the FMU demo does the same through FMI).
-    let case = Case::parse(&model_text("free-piston2d.toml")).unwrap();
+    let case = Case::parse(&common::model_text("free-piston2d.toml")).unwrap();
     let mut c = Coupling::new(&case, &options()).unwrap();
     let piston = c.body_index("piston").unwrap();
     let (mass, p0a, gamma, len): (f64, f64, f64, f64) = (2.0, 0.2, 1.4, 1.0);
@@ -215,7 +206,7 @@ fn a_free_piston_driven_by_a_master_oscillates_at_the_gas_spring_frequency() {
 
 #[test]
 fn probes_and_markers_read_the_hydrostatic_pressure() {
-    let text = model_text("closed-tank2d.toml")
+    let text = common::model_text("closed-tank2d.toml")
         + r#"
 [[probe]]
 name = "mid"
@@ -303,7 +294,7 @@ max = [0.9, 0.7]
 
 #[test]
 fn bad_inputs_are_clear_errors_and_change_nothing() {
-    let case = Case::parse(&model_text("free-piston2d.toml")).unwrap();
+    let case = Case::parse(&common::model_text("free-piston2d.toml")).unwrap();
     let mut c = Coupling::new(&case, &options()).unwrap();
     c.step_to(0.02).unwrap();
     let before = fingerprint(&c);
@@ -387,14 +378,15 @@ fn bad_inputs_are_clear_errors_and_change_nothing() {
         assert!(e.starts_with(want), "{e}");
     }
     // a marker off every surface, a probe of the wrong length
-    let off =
-        model_text("free-piston2d.toml").replace("point = [1.0, 0.1]\n", "point = [0.7, 0.1]\n");
+    let off = common::model_text("free-piston2d.toml")
+        .replace("point = [1.0, 0.1]\n", "point = [0.7, 0.1]\n");
     let e = Case::parse(&off).unwrap_err().0;
     assert!(
         e.contains("marker[0].point") && e.contains("within one wall spacing"),
         "{e}"
     );
-    let short = model_text("free-piston2d.toml").replace("point = [0.5, 0.1]", "point = [0.5]");
+    let short =
+        common::model_text("free-piston2d.toml").replace("point = [0.5, 0.1]", "point = [0.5]");
     let e = Case::parse(&short).unwrap_err().0;
     assert!(e.starts_with("probe[0].point: must have 2 entries"), "{e}");
 }

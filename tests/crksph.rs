@@ -6,15 +6,9 @@ use crate::common;
 
 use sphfmu::case::Case;
 use sphfmu::runner::run_case;
-use std::path::Path;
 
 fn model(name: &str) -> Case {
-    Case::load(
-        &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("models")
-            .join(name),
-    )
-    .unwrap()
+    Case::load(&common::model_path(name)).unwrap()
 }
 
 /// The case at `resolution` times its spacing refinement (1 = the model file's).

@@ -1,8 +1,8 @@
 //! Dam break (models/dambreak2d.toml): the surge front against Martin & Moyce (1952) and the
 //! impact on the block.
 
+use crate::common;
 use sphfmu::case::Case;
-use std::path::Path;
 
 /// Martin & Moyce (1952), Phil. Trans. R. Soc. A 244, 312–324, Fig. 3, n² = 2: (T, Z) with
 /// T = t √(2g/a), Z = x/a, for columns a = 1.125 in and a = 2.25 in, as digitised in PySPH's
@@ -21,8 +21,7 @@ const MARTIN_MOYCE: [(f64, f64); 9] = [
 
 #[test]
 fn the_surge_front_follows_martin_and_moyce_and_hits_the_block() {
-    let case =
-        Case::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("models/dambreak2d.toml")).unwrap();
+    let case = Case::load(&common::model_path("dambreak2d.toml")).unwrap();
     let mut sim = case.build::<2>().unwrap();
     let (a, g): (f64, f64) = (0.2, 9.81);
     let scale = (2.0 * g / a).sqrt();

@@ -1,17 +1,8 @@
 //! The non-inertial frame option (issue 5, `[frame]`): a tank's motion applied as fictitious
 //! forces in the tank's frame instead of moving its walls.
 
+use crate::common;
 use sphfmu::case::Case;
-use std::path::Path;
-
-fn model(name: &str) -> String {
-    std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("models")
-            .join(name),
-    )
-    .unwrap()
-}
 
 /// (time, water's centre of mass x relative to the tank, horizontal force on the tank).
 fn accelerated_tank(text: &str, t_end: f64) -> Vec<(f64, f64, f64)> {
@@ -48,8 +39,8 @@ fn a_frame_acceleration_equals_moving_the_walls() {
     // the tank's frame with the fictitious force −A.
     let ramp = r#"motion = { type = "ramp", velocity = [0.05, 0.0], ramp_time = 0.5 }"#;
     let shape = r#"shape = { type = "tank", min = [0.0, 0.0], max = [1.0, 0.8] }"#;
-    let moving = model("tank2d.toml").replace(shape, &format!("{shape}\n{ramp}"));
-    let framed = format!("{}\n[frame]\n{ramp}\n", model("tank2d.toml"));
+    let moving = common::model_text("tank2d.toml").replace(shape, &format!("{shape}\n{ramp}"));
+    let framed = format!("{}\n[frame]\n{ramp}\n", common::model_text("tank2d.toml"));
     // to t = 0.8 (0.3 s of free sloshing after the ramp); 1.2 s gave the same figures
     let t_end = 0.8;
     let a = accelerated_tank(&moving, t_end);
@@ -84,7 +75,7 @@ fn a_spinning_closed_tank_holds_the_centrifugal_pressure() {
     // Water in the closed box, no gravity, in a frame spinning at Ω = 4 rad/s about the box
     // centre from t = 0 (the water co-rotating): at rest in the frame, P = P_c + ½ρΩ²r².
     let omega = 4.0;
-    let text = model("closed-tank2d.toml")
+    let text = common::model_text("closed-tank2d.toml")
         .replace("gravity = [0.0, -9.81]\n", "")
         .replace("hydrostatic = true\n", "")
         + &format!(
@@ -143,7 +134,7 @@ fn a_spinning_closed_tank_holds_the_centrifugal_pressure() {
 
 #[test]
 fn bad_frames_are_clear_errors() {
-    let base = model("tank2d.toml");
+    let base = common::model_text("tank2d.toml");
     for (frame, msg) in [
         (
             r#"motion = { type = "external" }"#,

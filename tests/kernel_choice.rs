@@ -4,8 +4,9 @@
 //! quotes; they pin the cubic spline's errors so that the README changes when they do.
 
 use crate::bodies::{
-    cubic_lattice_gradient_moment, gas_spring_worst_deviation, model_text, open_tank_3d, sloshing,
+    cubic_lattice_gradient_moment, gas_spring_worst_deviation, open_tank_3d, sloshing,
 };
+use crate::common::model_text;
 
 /// `models/<name>` with its `[kernel]` table taken out: the scheme's default kernel.
 fn without_kernel(name: &str, table: &str) -> String {

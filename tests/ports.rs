@@ -4,20 +4,17 @@
 //! set through the Coupling API, save/restore across particle creation and deletion, and bad
 //! input.
 
+use crate::common;
 use sphfmu::case::Case;
 use sphfmu::coupling::sampling::port_value;
 use sphfmu::coupling::{Coupling, CouplingOptions, ParticleKind};
-
-fn model(name: &str) -> String {
-    std::fs::read_to_string(format!("{}/models/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap()
-}
 
 /// Exact plane Poiseuille flow of models/poiseuille-ports2d.toml: Q = ΔP H³ / (12 μ L).
 const Q_EXACT: f64 = 0.12 / (12.0 * 0.1 * 2.0);
 
 #[test]
 fn poiseuille_between_two_pressure_ports_matches_the_exact_flow_rate() {
-    let case = Case::parse(&model("poiseuille-ports2d.toml")).unwrap();
+    let case = Case::parse(&common::model_text("poiseuille-ports2d.toml")).unwrap();
     let mut sim = case.build::<2>().unwrap();
     let m0 = sim.diagnostics().mass;
     // flow through the two ports (mean of inlet and outlet) every 0.1 s over t ∈ (6, 10],
@@ -71,7 +68,7 @@ fn poiseuille_between_two_pressure_ports_matches_the_exact_flow_rate() {
 
 #[test]
 fn a_tank_drains_through_a_bottom_port_by_torricellis_law() {
-    let case = Case::parse(&model("drain2d.toml")).unwrap();
+    let case = Case::parse(&common::model_text("drain2d.toml")).unwrap();
     let mut sim = case.build::<2>().unwrap();
     let (rho0, g, area) = (1000.0, 9.81, 0.2);
     let depth = |sim: &sphfmu::sim::Simulation<2>| sim.diagnostics().mass / rho0;
@@ -121,7 +118,7 @@ fn a_tank_drains_through_a_bottom_port_by_torricellis_law() {
 
 /// The Poiseuille case with the inlet pressure set from outside.
 fn external_inlet() -> Case {
-    let text = model("poiseuille-ports2d.toml").replace(
+    let text = common::model_text("poiseuille-ports2d.toml").replace(
         "{ type = \"ramp\", from = 0.0, to = 0.12, duration = 1.0 }",
         "{ type = \"external\", initial = 0.06 }",
     );
@@ -249,7 +246,7 @@ fn bits(c: &Coupling) -> Vec<u64> {
 
 #[test]
 fn save_and_restore_across_particle_creation_and_deletion_is_bit_exact() {
-    let case = Case::parse(&model("drain2d.toml")).unwrap();
+    let case = Case::parse(&common::model_text("drain2d.toml")).unwrap();
     let mut a = Coupling::new(&case, &CouplingOptions::default()).unwrap();
     a.step_to(0.05).unwrap();
     let saved = a.save();
@@ -268,7 +265,7 @@ fn save_and_restore_across_particle_creation_and_deletion_is_bit_exact() {
 
 #[test]
 fn bad_ports_in_a_case_are_named() {
-    let base = model("poiseuille-ports2d.toml");
+    let base = common::model_text("poiseuille-ports2d.toml");
     let check = |from: &str, to: &str, want: &str| {
         let text = base.replacen(from, to, 1);
         assert_ne!(text, base, "{from:?} not found");

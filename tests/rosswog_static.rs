@@ -1,21 +1,16 @@
 //! Static tests of Rosswog's formulations: the hydrostatic square (X = P^k removes the spurious
 //! surface tension that X = m creates) and the noise box (a lattice at rest, no dissipation).
 
+use crate::common;
 use sphfmu::case::Case;
 use std::collections::HashMap;
 
-fn model(name: &str) -> String {
-    std::fs::read_to_string(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("models")
-            .join(name),
-    )
-    .unwrap()
-}
-
 /// Mean displacement (in lattice spacings) of all particles after running to t_end.
 fn square_displacement(name: &str) -> f64 {
-    let mut sim = Case::parse(&model(name)).unwrap().build::<2>().unwrap();
+    let mut sim = Case::parse(&common::model_text(name))
+        .unwrap()
+        .build::<2>()
+        .unwrap();
     let start: HashMap<u32, (f64, f64)> = (0..sim.sys.particles.len())
         .map(|i| {
             (
@@ -49,7 +44,7 @@ fn hydrostatic_square_f1_keeps_it_f3_deforms() {
 
 fn noise(kernel: &str, eta: f64) -> f64 {
     // three sound-crossing times (τ_s = 0.0775)
-    let text = model("noise-box.toml")
+    let text = common::model_text("noise-box.toml")
         .replace("t_end = 0.775", "t_end = 0.2325")
         .replace(
             "name = \"wendland-c6\"\neta = 2.2",

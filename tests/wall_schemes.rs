@@ -4,19 +4,14 @@
 //! in their lists (their volume sums need a wall particle's full neighbourhood) and skip them
 //! in the force pass; the standard scheme's runs are in `bodies.rs`.
 
+use crate::common;
 use sphfmu::case::Case;
-use std::path::Path;
 
 /// A model's text with its `[scheme]` table replaced by `scheme`, together with a `[kernel]`
 /// table between it and `[time]` (piston2d.toml's choice for standard SPH), so that each scheme
 /// runs with its own kernel.
 fn with_scheme(model: &str, scheme: &str) -> String {
-    let text = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("models")
-            .join(model),
-    )
-    .unwrap();
+    let text = common::model_text(model);
     let start = text.find("[scheme]").unwrap();
     let end = start + text[start..].find("\n[time]").unwrap();
     format!("{}[scheme]\n{scheme}\n{}", &text[..start], &text[end..])

@@ -2,6 +2,19 @@
 #![allow(dead_code)]
 
 use sphfmu::sim::Simulation;
+use std::path::PathBuf;
+
+/// `models/<name>` of this repository.
+pub fn model_path(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("models")
+        .join(name)
+}
+
+/// The text of `models/<name>`.
+pub fn model_text(name: &str) -> String {
+    std::fs::read_to_string(model_path(name)).unwrap()
+}
 
 /// The `[case]`, `[domain]` and `[eos]` tables of a test case: dimension, box [lo, hi]^D with
 /// one boundary kind on every axis, ideal gas with γ.
