@@ -16,20 +16,23 @@ all: build
 build:
 	$(CARGO) build --release --workspace
 
-# The FMUs: target/fmu/sphfmu.fmu (FMI 3.0) and sphfmu-fmi2.fmu (FMI 2.0) for FMU_CASE, and
-# the same pair for the hydrostatic tank under target/fmu/closed-tank2d/ and for the channel
-# between two pressure ports under target/fmu/channel-ports2d/ and the sloshing tank under
-# target/fmu/slosh2d/ (the tests use all four). `cargo build --workspace` also builds the
-# zenoh node sphfmu-serve (`sphfmu serve`).
-FMU_CASE ?= models/free-piston2d.toml
+# The FMUs: target/fmu/sphfmu.fmu (FMI 3.0) and sphfmu-fmi2.fmu (FMI 2.0) for the demo's
+# free piston, and the same pair for the hydrostatic tank under target/fmu/closed-tank2d/, the
+# channel between two pressure ports under target/fmu/channel-ports2d/ and the sloshing tank
+# under target/fmu/slosh2d/ (the tests use all four). `make fmu FMU_CASE=models/x.toml` also
+# packages x under target/fmu/<its case name>/ and leaves the others alone. `cargo build
+# --workspace` also builds the zenoh node sphfmu-serve (`sphfmu serve`).
+DEMO_CASE := models/free-piston2d.toml
+FMU_CASE ?=
 FMU_LIB := target/release/libsphfmu_fmu.so
-PACKAGE := target/release/sphfmu-package
+PACKAGE := target/release/sphfmu-package --lib $(FMU_LIB) --models models
 fmu:
 	$(CARGO) build --release --workspace
-	$(PACKAGE) --case $(FMU_CASE) --lib $(FMU_LIB) --models models --out target/fmu
-	$(PACKAGE) --case models/closed-tank2d.toml --lib $(FMU_LIB) --models models --out target/fmu/closed-tank2d
-	$(PACKAGE) --case models/channel-ports2d.toml --lib $(FMU_LIB) --models models --out target/fmu/channel-ports2d
-	$(PACKAGE) --case models/slosh2d.toml --lib $(FMU_LIB) --models models --out target/fmu/slosh2d
+	$(PACKAGE) --case $(DEMO_CASE) --out target/fmu
+	$(PACKAGE) --case models/closed-tank2d.toml --out target/fmu/closed-tank2d
+	$(PACKAGE) --case models/channel-ports2d.toml --out target/fmu/channel-ports2d
+	$(PACKAGE) --case models/slosh2d.toml --out target/fmu/slosh2d
+	$(if $(FMU_CASE),$(PACKAGE) --case $(FMU_CASE))
 
 # Main job: build the FMU and co-simulate a free piston on a gas spring with a Python master
 # (fmpy) -> target/demo/free_piston.png, and the period against the gas-spring theory.
@@ -59,16 +62,10 @@ test-python: build fmu venv
 test-import: fmu libclang
 	cd fmu/import-test && CARGO_TARGET_DIR=$(CURDIR)/target/import-test $(CARGO) test --release
 
-# libclang for bindgen: Debian's libclang-dev, installed when missing (apt-get as root, else sudo).
-SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+# libclang for bindgen: Debian's libclang-dev, installed when what bindgen loads is missing
+# (tools/ensure_libclang.sh says what it looks for and why a glob is not enough).
 libclang:
-	@if ldconfig -p 2>/dev/null | grep -q 'libclang\(-[0-9.]*\)\?\.so' || ls /usr/lib/llvm-*/lib/libclang*.so* >/dev/null 2>&1; then \
-	  echo "libclang: present"; \
-	else \
-	  echo "libclang: installing Debian's libclang-dev (rust-fmi's fmi-sys runs bindgen at build time)"; \
-	  $(SUDO) apt-get install -y -q libclang-dev || { $(SUDO) apt-get update -q && $(SUDO) apt-get install -y -q libclang-dev; } \
-	  || { echo "libclang: could not install libclang-dev; install it (apt-get install libclang-dev) and rerun"; exit 1; }; \
-	fi
+	tools/ensure_libclang.sh
 
 # Throughput table (particle-updates/s, pair interactions/s), 2D and 3D periodic boxes; then
 # live coupling on loopback: round trips with the zenoh node, publishing's cost per doStep.

@@ -18,4 +18,5 @@ pub mod runner;
 pub mod scheme;
 pub mod sim;
 pub mod system;
+pub mod units;
 pub mod verify;

@@ -92,6 +92,10 @@ pub struct Diagnostics {
     pub angular_momentum: [f64; 3],
     pub kinetic_energy: f64,
     pub internal_energy: f64,
+    /// Energy in uniform gravity, −Σ m g·x (zero without gravity; zero in a moving `[frame]`,
+    /// where the body force also holds the frame's acceleration and has no fixed potential).
+    pub potential_energy: f64,
+    /// Kinetic + internal + potential.
     pub total_energy: f64,
 }
 
@@ -280,6 +284,11 @@ impl<const D: usize> Simulation<D> {
             particles: p.len(),
             ..Default::default()
         };
+        let g = if self.sys.frame.is_none() {
+            self.sys.gravity
+        } else {
+            Vector::<D>::zeros()
+        };
         for a in 0..p.len() {
             // the fluid only: wall particles belong to bodies, whose loads are reported apart,
             // and port buffers are outside the domain
@@ -301,8 +310,9 @@ impl<const D: usize> Simulation<D> {
             }
             d.kinetic_energy += 0.5 * m * v.norm_squared();
             d.internal_energy += m * p.u[a];
+            d.potential_energy -= m * g.dot(&x);
         }
-        d.total_energy = d.kinetic_energy + d.internal_energy;
+        d.total_energy = d.kinetic_energy + d.internal_energy + d.potential_energy;
         d
     }
 }

@@ -1,52 +1,8 @@
-//! Units of the FMU's variables: per dimension (a 2D case is per metre of depth, a 1D case
-//! per square metre), and every unit with its SI exponents for `<UnitDefinitions>`.
+//! Units of the FMU's variables: the core's per-dimension units (`sphfmu::units`: a 2D case
+//! is per metre of depth, a 1D case per square metre), every unit with its SI exponents for
+//! `<UnitDefinitions>`, and the `quantity` of each variable.
 
-/// Units by dimension: a 2D case is per metre of depth.
-pub(crate) struct Units {
-    pub area: &'static str,
-    pub volume_flow: &'static str,
-    pub mass_flow: &'static str,
-    pub force: &'static str,
-    pub torque: &'static str,
-    pub mass: &'static str,
-    pub momentum: &'static str,
-    pub energy: &'static str,
-}
-
-pub(crate) fn units(dimension: usize) -> Units {
-    match dimension {
-        1 => Units {
-            area: "1",
-            volume_flow: "m/s",
-            mass_flow: "kg/(m2.s)",
-            force: "N/m2",
-            torque: "N/m",
-            mass: "kg/m2",
-            momentum: "kg/(m.s)",
-            energy: "J/m2",
-        },
-        2 => Units {
-            area: "m",
-            volume_flow: "m2/s",
-            mass_flow: "kg/(m.s)",
-            force: "N/m",
-            torque: "N",
-            mass: "kg/m",
-            momentum: "kg/s",
-            energy: "J/m",
-        },
-        _ => Units {
-            area: "m2",
-            volume_flow: "m3/s",
-            mass_flow: "kg/s",
-            force: "N",
-            torque: "N.m",
-            mass: "kg",
-            momentum: "kg.m/s",
-            energy: "J",
-        },
-    }
-}
+pub(crate) use sphfmu::units::units;
 
 /// Every unit a table may use, with its SI base-unit exponents (kg, m, s), for
 /// `<UnitDefinitions>`.
@@ -78,3 +34,41 @@ pub const UNITS: &[(&str, [i32; 3])] = &[
     ("J/m", [1, 1, -2]),
     ("J", [1, 2, -2]),
 ];
+
+/// The `quantity` attribute of a variable (FMI 3.0 §2.4.7.4, FMI 2.0 §2.2.7: a free name of
+/// the physical quantity, which a tool may use to check connections besides the unit).
+/// Extensive quantities of a 2D case are per metre of depth and those of a 1D case per
+/// square metre, so they carry that in the name (`ForcePerDepth`), as in the unit (`N/m`):
+/// a tool must not connect a 2D force to a 3D model's force without the depth.
+pub(crate) fn quantity(binding: &crate::table::Binding, dimension: usize) -> Option<String> {
+    use crate::table::{Binding as B, Param, PortOutput as P};
+    let (name, extensive) = match binding {
+        B::Time | B::Dt | B::Param(Param::OutputInterval) => ("Time", false),
+        B::Gravity => ("Acceleration", false),
+        B::BodyPosition(_) => ("Length", false),
+        B::BodyAngle(_) => ("Angle", false),
+        B::BodyVelocity(_) | B::ProbeVelocity(_) | B::Port(_, P::Velocity) => ("Velocity", false),
+        B::BodyAngularVelocity(_) => ("AngularVelocity", false),
+        B::BodyForce(_) | B::PatchForce(_) => ("Force", true),
+        B::BodyTorque(_) => ("Torque", true),
+        B::ProbeDensity(_) => ("Density", false),
+        B::ProbePressure(_)
+        | B::Marker(_)
+        | B::PatchMean(_)
+        | B::PatchPeak(_)
+        | B::PortPressure(_)
+        | B::Port(_, P::Pressure | P::MeanPressure) => ("Pressure", false),
+        B::PatchArea(_) => ("Area", true),
+        B::Port(_, P::VolumeFlow) => ("VolumeFlowRate", true),
+        B::Port(_, P::MassFlow) => ("MassFlowRate", true),
+        B::Port(_, P::MassIn | P::MassOut) | B::Mass => ("Mass", true),
+        B::Momentum => ("Momentum", true),
+        B::Energy => ("Energy", true),
+        _ => return None,
+    };
+    Some(match (extensive, dimension) {
+        (true, 2) => format!("{name}PerDepth"),
+        (true, 1) => format!("{name}PerArea"),
+        _ => name.to_string(),
+    })
+}

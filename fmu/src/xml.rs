@@ -1,7 +1,7 @@
 //! modelDescription.xml for FMI 3.0 and FMI 2.0, written from the variable table.
 
 use crate::table::{Causality, Kind, Start, Table, Variable};
-use crate::units::UNITS;
+use crate::units::{quantity, UNITS};
 use std::fmt::Write;
 
 pub const MODEL_IDENTIFIER: &str = "sphfmu";
@@ -21,11 +21,44 @@ pub const LOG_CATEGORIES: &[(&str, &str)] = &[
     ),
 ];
 
-/// Run-time facts the XML carries besides the table.
+/// What the XML says about the model besides its variables: the root element's attributes
+/// and `<DefaultExperiment>`.
 pub struct Experiment {
+    /// `modelName`: the case's name, so two case FMUs do not look alike in a tool.
+    pub model_name: String,
+    /// `description`: the case's description (its name when it has none).
+    pub description: String,
+    /// `author`: the case's author (the `[case] author` key), else "sphfmu".
+    pub author: String,
+    /// `license` (SPDX expression of the FMU binary).
+    pub license: String,
+    /// `generationDateAndTime`, xs:dateTime in UTC (`2026-12-01T22:02:16Z`).
+    pub generated: String,
     pub stop_time: f64,
     pub step_size: f64,
-    pub description: String,
+}
+
+/// `generationDateAndTime` for `seconds` since the Unix epoch (UTC, xs:dateTime); the
+/// packager passes SOURCE_DATE_EPOCH when set, so a packaging run can be reproduced byte for
+/// byte (reproducible-builds.org's convention).
+pub fn date_time(seconds: u64) -> String {
+    let (days, rem) = (seconds / 86_400, seconds % 86_400);
+    // civil date from days since 1970-01-01 (Howard Hinnant's days_from_civil inverse)
+    let z = days as i64 + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!(
+        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}Z",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
 }
 
 pub fn escape(s: &str) -> String {
@@ -102,9 +135,13 @@ fn log_categories(out: &mut String) {
 fn root(table: &Table, exp: &Experiment, version: &str, token_attr: &str, extra: &str) -> String {
     let v = env!("CARGO_PKG_VERSION");
     format!(
-        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<fmiModelDescription fmiVersion=\"{version}\" modelName=\"sphfmu\" {token_attr}=\"{}\" description=\"{}\" generationTool=\"sphfmu-package {v}\" version=\"{v}\"{extra}>\n",
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<fmiModelDescription fmiVersion=\"{version}\" modelName=\"{}\" {token_attr}=\"{}\" description=\"{}\" author=\"{}\" version=\"{v}\" license=\"{}\" generationTool=\"sphfmu-package {v} (sphfmu {v})\" generationDateAndTime=\"{}\"{extra}>\n",
+        escape(&exp.model_name),
         token(table),
-        escape(&exp.description)
+        escape(&exp.description),
+        escape(&exp.author),
+        escape(&exp.license),
+        escape(&exp.generated),
     )
 }
 
@@ -164,6 +201,9 @@ pub fn fmi3(table: &Table, exp: &Experiment) -> String {
         );
         if v.causality == Causality::Output {
             attrs.push_str(" initial=\"calculated\"");
+        }
+        if let Some(q) = quantity(&v.binding, table.dimension) {
+            write!(attrs, " quantity=\"{q}\"").unwrap();
         }
         if let Some(u) = v.unit {
             write!(attrs, " unit=\"{}\"", escape(u)).unwrap();
@@ -254,6 +294,9 @@ pub fn fmi2(table: &Table, exp: &Experiment) -> String {
             Start::Float(x) => write!(t, " start=\"{}\"", num(x[s.element])).unwrap(),
             Start::Int(i) => write!(t, " start=\"{i}\"").unwrap(),
             Start::Text(x) => write!(t, " start=\"{}\"", escape(x)).unwrap(),
+        }
+        if let Some(q) = quantity(&v.binding, table.dimension) {
+            write!(t, " quantity=\"{q}\"").unwrap();
         }
         if let Some(u) = v.unit {
             write!(t, " unit=\"{}\"", escape(u)).unwrap();

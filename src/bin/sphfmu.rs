@@ -7,23 +7,52 @@ use sphfmu::runner::{run_case, Progress, RunError};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-const RUN_HELP: &str = "\
-Schemes and presets (scheme.name):
-  standard      traditional grad-h SPH, Monaghan-Gingold viscosity (alpha, beta), Balsara
-                switch, optional artificial conductivity
-  rpsph         relative-pressure SPH (Abel 2011): gradient = own-h | symmetric, shock_switch
-  rosswog-f1    Rosswog 2015 F1: IA gradients, X = P^k (k = 0.05), triggered dissipation,
-                Wendland C6 eta = 2.2, SSP-RK3, CFL 0.5
-  rosswog-f2    as F1 with kernel gradients and grad-h terms
-  rosswog-f3    as F1 with X = m
-  rosswog-f4    kernel gradients, X = m, constant K = 1, M4 eta = 1.2 ('standard SPH')
-  Rosswog keys override a preset: volume (one|mass|pressure), k, gradient
-  (kernel|integral-approximation), triggers, k_constant, k_max, n_noise, chi, k_min,
-  signal_velocity (galilean|literal).
-Kernels (kernel.name): cubic-spline, quartic-spline, quintic-spline, septic-spline,
-  wendland-c2, wendland-c4, wendland-c6, sinc (kernel.sinc_n = 3..9), liq, qcm6.
-Integrators (time.integrator): leapfrog, ssp-rk3, crk-rk2.
-Exit codes: 0 done, 2 bad case file, 3 unstable run (snapshots so far kept), 4 I/O error.";
+/// `sphfmu run --help`'s epilogue, written from the library's own lists (the scheme presets,
+/// the kernels with their default η, the integrators), so it names every one of them.
+fn run_help() -> String {
+    use sphfmu::kernel::{AnyKernel, Kernel, KernelName};
+    use sphfmu::scheme::{SchemeConfig, PRESETS};
+    let mut o = String::from(
+        "Schemes and presets (scheme.name, or --scheme; each with its own kernel, eta, integrator and CFL\n\
+         unless the case sets [kernel] and [time]):\n",
+    );
+    for (name, what) in PRESETS {
+        let defaults = toml::from_str::<SchemeConfig>(&format!("name = {name:?}"))
+            .map(|c| {
+                let (k, eta) = c.preferred_kernel();
+                let kernel = KernelName::ALL
+                    .iter()
+                    .find(|e| e.0 == k)
+                    .map_or("?", |e| e.1);
+                let eta = eta.unwrap_or_else(|| {
+                    AnyKernel::from_name(k, 5).map_or(f64::NAN, |k| k.default_eta())
+                });
+                let (integrator, cfl) = c.preferred_integrator();
+                format!("{kernel} eta {eta}, {}, CFL {cfl}", integrator.name())
+            })
+            .unwrap_or_default();
+        o.push_str(&format!("  {name:<15}{what}\n  {:<15}[{defaults}]\n", ""));
+    }
+    o.push_str(
+        "  Rosswog keys override a preset: volume (one|mass|pressure), k, gradient\n\
+         \x20 (kernel|integral-approximation), triggers, k_constant, k_max, n_noise, chi, k_min,\n\
+         \x20 signal_velocity (galilean|literal).\n\
+         Kernels (kernel.name; all with support 2h, h = eta (m/rho)^(1/D); eta = the kernel's default):\n",
+    );
+    for (k, name, what) in KernelName::ALL {
+        let eta = AnyKernel::from_name(k, 5).map_or(f64::NAN, |k| k.default_eta());
+        o.push_str(&format!("  {name:<15}eta {eta:<4} {what}\n"));
+    }
+    o.push_str(
+        "Integrators (time.integrator): leapfrog (kick-drift-kick), ssp-rk3 (Shu-Osher), crk-rk2\n\
+         \x20 (the CRKSPH paper's one-evaluation RK2).\n\
+         Units: SI (m, kg, s, Pa, N) in every label; the liquid and body cases are in SI, the gas\n\
+         \x20 test problems (Sod, Noh, Sedov, Gresho) in the papers' dimensionless units. A 2D case\n\
+         \x20 is per metre of depth (forces N/m, masses kg/m, energies J/m), a 1D case per m2.\n\
+         Exit codes: 0 done, 2 bad case file, 3 unstable run (snapshots so far kept), 4 I/O error.",
+    );
+    o
+}
 
 #[derive(Parser)]
 #[command(
@@ -40,7 +69,6 @@ struct Cli {
 enum Command {
     /// Run a case: snapshots (VTU, CSV), diagnostics.csv, summary.json, and for cases with a
     /// [verify] table the L1 errors and profile.png against the exact solution.
-    #[command(after_help = RUN_HELP)]
     Run {
         /// Case file (TOML), e.g. models/sod.toml
         case: PathBuf,
@@ -117,6 +145,61 @@ fn serve(args: &[String]) -> ExitCode {
     }
 }
 
+/// The run summary's momentum and energy lines, each saying what it measures: a conservation
+/// error only where nothing outside the fluid acts on it.
+fn print_balances(s: &sphfmu::runner::RunSummary) {
+    use sphfmu::runner::MomentumCheck;
+    let u = sphfmu::units::units(s.dimension);
+    let v = |a: &[f64; 3]| {
+        let a = &a[..s.dimension];
+        let parts: Vec<String> = a.iter().map(|x| format!("{x:.4e}")).collect();
+        format!("[{}] {}", parts.join(", "), u.momentum)
+    };
+    let residual = s.momentum_residual.unwrap_or(f64::NAN);
+    match s.momentum_check {
+        MomentumCheck::Conservation => println!(
+            "momentum conservation: |P(t) - P(0)| = {residual:.3e} of max Σ m|v| (nothing outside the fluid acts on it: the scheme's own error)"
+        ),
+        MomentumCheck::Balance => println!(
+            "momentum balance: change {} = gravity impulse {} + wall impulse {}; residual {residual:.3e} of the largest impulse (the scheme's own error)",
+            v(&s.momentum_change), v(&s.gravity_impulse), v(&s.wall_impulse)
+        ),
+        MomentumCheck::Boundaries => println!(
+            "momentum change {}: the impulse of the domain's mirror walls, frozen layers, ports or frame on the fluid (physical, not a conservation error; no balance is computed for these boundaries)",
+            v(&s.momentum_change)
+        ),
+    }
+    let (d0, d1) = (&s.initial, &s.last);
+    let with_gravity = d0.potential_energy != 0.0 || d1.potential_energy != 0.0;
+    let what = if with_gravity {
+        "kinetic + internal + potential in gravity"
+    } else {
+        "kinetic + internal"
+    };
+    let (e0, e1) = (d0.total_energy, d1.total_energy);
+    let change = if e0 != 0.0 {
+        format!(" (relative change {:.3e})", (e1 - e0) / e0.abs())
+    } else {
+        String::new()
+    };
+    println!(
+        "total energy ({what}) {e0:.9e} -> {e1:.9e} {}{change}",
+        u.energy
+    );
+    if with_gravity {
+        println!(
+            "  kinetic {:.4e} -> {:.4e}, internal {:.4e} -> {:.4e}, potential {:.4e} -> {:.4e} {}",
+            d0.kinetic_energy,
+            d1.kinetic_energy,
+            d0.internal_energy,
+            d1.internal_energy,
+            d0.potential_energy,
+            d1.potential_energy,
+            u.energy,
+        );
+    }
+}
+
 fn fail(code: u8, msg: impl std::fmt::Display) -> ExitCode {
     eprintln!("sphfmu: {msg}");
     ExitCode::from(code)
@@ -136,7 +219,12 @@ fn set_threads(threads: Option<usize>) -> Result<(), String> {
 }
 
 fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
+    use clap::{CommandFactory, FromArgMatches};
+    let command = Cli::command().mut_subcommand("run", |c| c.after_help(run_help()));
+    let cli = match command
+        .try_get_matches()
+        .and_then(|m| Cli::from_arg_matches(&m))
+    {
         Ok(c) => c,
         Err(e) => {
             let code = if e.use_stderr() { 2 } else { 0 };
@@ -228,7 +316,7 @@ fn main() -> ExitCode {
             match res {
                 Ok(s) => {
                     println!(
-                        "{}: {} particles, {} steps to t = {:.6}, {:.2} s, {:.3e} particle-updates/s",
+                        "{}: {} particles, {} steps to t = {:.6} s, {:.2} s wall clock, {:.3e} particle-updates/s",
                         s.case, s.particles, s.steps, s.time, s.wall_seconds, s.particle_updates_per_second
                     );
                     let ph = s.phase_seconds;
@@ -236,24 +324,7 @@ fn main() -> ExitCode {
                         "time per phase: neighbours {:.2} s ({} list builds: {:.2} s), density/h {:.2} s ({:.2} iterations), gradients {:.2} s, forces {:.2} s",
                         ph[0], s.neighbour_list_builds, s.list_build_seconds, ph[1], s.mean_h_iterations, ph[2], ph[3]
                     );
-                    println!(
-                        "momentum change |P(t) - P(0)| / max Σ m|v|: {:.3e} (walls and gravity included; periodic boxes: the scheme's drift)",
-                        s.momentum_drift
-                    );
-                    if s.ia_fallbacks > 0 {
-                        println!("IA gradient fell back to the kernel gradient {} times (near-singular τ)", s.ia_fallbacks);
-                    }
-                    let (e0, e1) = (s.initial.total_energy, s.last.total_energy);
-                    // kinetic + internal (no potential energy of gravity): a liquid at rest
-                    // starts at 0, where a relative change means nothing
-                    if e0 != 0.0 {
-                        println!(
-                            "total energy {e0:.12e} -> {e1:.12e} (relative change {:.3e})",
-                            (e1 - e0) / e0.abs()
-                        );
-                    } else {
-                        println!("total energy (kinetic + internal) {e0:.12e} -> {e1:.12e}");
-                    }
+                    print_balances(&s);
                     if let Some(e) = s.shock_tube {
                         println!(
                             "L1 against the exact Riemann solution: rho {:.4e}, v {:.4e}, P {:.4e} ({} particles)",
@@ -263,11 +334,15 @@ fn main() -> ExitCode {
                     if let Some(l1) = s.vortex_l1 {
                         println!("L1(v) against the stationary Gresho vortex: {l1:.4e}");
                     }
+                    let u = sphfmu::units::units(s.dimension);
                     for b in &s.bodies {
                         println!(
-                            "body {:?}: force [{:.6e}, {:.6e}, {:.6e}], torque [{:.6e}, {:.6e}, {:.6e}]",
-                            b.name, b.force[0], b.force[1], b.force[2], b.torque[0], b.torque[1], b.torque[2]
+                            "body {:?}: force [{:.6e}, {:.6e}, {:.6e}] {}, torque [{:.6e}, {:.6e}, {:.6e}] {}",
+                            b.name, b.force[0], b.force[1], b.force[2], u.force, b.torque[0], b.torque[1], b.torque[2], u.torque
                         );
+                    }
+                    if s.dimension == 2 && !s.bodies.is_empty() {
+                        println!("(2D: loads, masses and energies are per metre of depth)");
                     }
                     if let Some(r) = s.radial {
                         println!(

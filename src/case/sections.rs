@@ -14,6 +14,9 @@ pub struct CaseInfo {
     pub name: String,
     #[serde(default)]
     pub description: String,
+    /// Who wrote the case: the packaged FMU's `author` (empty: "sphfmu").
+    #[serde(default)]
+    pub author: String,
     /// 1, 2 or 3.
     pub dimension: usize,
 }

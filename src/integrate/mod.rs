@@ -28,6 +28,17 @@ pub enum IntegratorKind {
     CrkRk2,
 }
 
+impl IntegratorKind {
+    /// The case-file name (`time.integrator`).
+    pub fn name(self) -> &'static str {
+        match self {
+            IntegratorKind::Leapfrog => "leapfrog",
+            IntegratorKind::SspRk3 => "ssp-rk3",
+            IntegratorKind::CrkRk2 => "crk-rk2",
+        }
+    }
+}
+
 /// Saved start-of-step state.
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
 struct Saved<const D: usize> {

@@ -107,7 +107,7 @@ pub fn write_pvd(path: &Path, entries: &[(f64, String)]) -> io::Result<()> {
 
 pub fn write_csv<const D: usize>(path: &Path, p: &Particles<D>) -> io::Result<()> {
     let mut s = String::with_capacity(p.len() * 160);
-    s.push_str("x,y,z,vx,vy,vz,m,h,rho,u,P,cs,id,material\n");
+    s.push_str(&csv_header(D));
     for i in 0..p.len() {
         let x = |k: usize| if k < D { p.pos[i][k] } else { 0.0 };
         let v = |k: usize| if k < D { p.vel[i][k] } else { 0.0 };
@@ -133,6 +133,15 @@ pub fn write_csv<const D: usize>(path: &Path, p: &Particles<D>) -> io::Result<()
     write_atomic(path, s.as_bytes())
 }
 
+/// The snapshot CSV's header: `name [unit]` per column (crate::units: a 2D particle's mass
+/// is per metre of depth).
+pub fn csv_header(dimension: usize) -> String {
+    let m = crate::units::units(dimension).mass;
+    format!(
+        "x [m],y [m],z [m],vx [m/s],vy [m/s],vz [m/s],m [{m}],h [m],rho [kg/m3],u [J/kg],P [Pa],cs [m/s],id,material\n"
+    )
+}
+
 /// Diagnostics time series, one CSV row per record, flushed as it goes so an aborted run
 /// keeps everything written so far.
 pub struct DiagnosticsWriter {
@@ -140,22 +149,29 @@ pub struct DiagnosticsWriter {
 }
 
 impl DiagnosticsWriter {
-    pub const HEADER: &'static str =
-        "time,step,dt,particles,mass,px,py,pz,Lx,Ly,Lz,kinetic,internal,total";
+    /// The header in `dimension` (units per metre of depth in 2D, crate::units). `potential`
+    /// is the energy in uniform gravity, −Σ m g·x; `total` = kinetic + internal + potential.
+    pub fn header(dimension: usize) -> String {
+        let u = crate::units::units(dimension);
+        let (m, p, l, e) = (u.mass, u.momentum, u.angular_momentum, u.energy);
+        format!(
+            "time [s],step,dt [s],particles,mass [{m}],px [{p}],py [{p}],pz [{p}],Lx [{l}],Ly [{l}],Lz [{l}],kinetic [{e}],internal [{e}],potential [{e}],total [{e}]"
+        )
+    }
 
-    pub fn create(path: &Path) -> io::Result<Self> {
+    pub fn create(path: &Path, dimension: usize) -> io::Result<Self> {
         let mut file = io::BufWriter::new(std::fs::File::create(path)?);
-        writeln!(file, "{}", Self::HEADER)?;
+        writeln!(file, "{}", Self::header(dimension))?;
         Ok(Self { file })
     }
 
     pub fn record(&mut self, d: &Diagnostics) -> io::Result<()> {
         writeln!(
             self.file,
-            "{:.17e},{},{:.17e},{},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e}",
+            "{:.17e},{},{:.17e},{},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e}",
             d.time, d.step, d.dt, d.particles, d.mass, d.momentum[0], d.momentum[1], d.momentum[2],
             d.angular_momentum[0], d.angular_momentum[1], d.angular_momentum[2],
-            d.kinetic_energy, d.internal_energy, d.total_energy
+            d.kinetic_energy, d.internal_energy, d.potential_energy, d.total_energy
         )?;
         self.file.flush()
     }

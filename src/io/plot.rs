@@ -11,8 +11,14 @@ pub struct Panel<'a> {
     pub particles: &'a [(f64, f64)],
     pub exact: &'a [(f64, f64)],
     pub x_desc: &'a str,
+    /// The y axis: quantity and unit, e.g. "force (N/m)".
+    pub y_desc: &'a str,
     pub line_label: &'a str,
 }
+
+/// Head room above the data, as a share of its range, where the legend goes: the legend sits
+/// in the upper right corner of the panel, above every point and curve, so it covers none.
+const LEGEND_ROOM: f64 = 0.32;
 
 fn register_font() {
     // Registration is idempotent; plotters keeps the bytes in its own table.
@@ -36,8 +42,9 @@ fn bounds(pts: &[(f64, f64)], other: &[(f64, f64)]) -> (f64, f64, f64, f64) {
             y1 = y1.max(y);
         }
     }
-    let pad = 0.06 * (y1 - y0).max(1e-12);
-    (x0, x1.max(x0 + 1e-12), y0 - pad, y1 + pad)
+    let range = (y1 - y0).max(1e-12 * y1.abs().max(1.0));
+    let pad = 0.06 * range;
+    (x0, x1.max(x0 + 1e-12), y0 - pad, y1 + LEGEND_ROOM * range)
 }
 
 /// Write a PNG with the panels stacked in a grid (2 columns).
@@ -55,13 +62,14 @@ pub fn profile_png(path: &Path, caption: &str, panels: &[Panel<'_>]) -> Result<(
         let mut chart = ChartBuilder::on(area)
             .caption(panel.title, ("sans-serif", 18))
             .margin(12)
-            .x_label_area_size(32)
-            .y_label_area_size(60)
+            .x_label_area_size(40)
+            .y_label_area_size(80)
             .build_cartesian_2d(x0..x1, y0..y1)
             .map_err(|e| e.to_string())?;
         chart
             .configure_mesh()
             .x_desc(panel.x_desc)
+            .y_desc(panel.y_desc)
             .draw()
             .map_err(|e| e.to_string())?;
         if !panel.particles.is_empty() {
@@ -86,7 +94,8 @@ pub fn profile_png(path: &Path, caption: &str, panels: &[Panel<'_>]) -> Result<(
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED.stroke_width(2)));
         chart
             .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE)
             .border_style(BLACK)
             .draw()
             .map_err(|e| e.to_string())?;

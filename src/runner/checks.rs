@@ -146,6 +146,7 @@ fn verify_radial<const D: usize>(
         sim,
         out,
         &caption,
+        "r (m)",
         &radius,
         &v_r,
         ["density against r", "radial velocity"],
@@ -160,6 +161,7 @@ fn write_profile<const D: usize>(
     sim: &Simulation<D>,
     out: &Path,
     caption: &str,
+    x_desc: &str,
     x: &dyn Fn(usize) -> f64,
     velocity: &dyn Fn(usize) -> f64,
     titles: [&str; 2],
@@ -176,35 +178,19 @@ fn write_profile<const D: usize>(
         col(&|i| p.pressure[i]),
         col(&|i| p.u[i]),
     );
+    let panel = |title, particles, exact, y_desc| Panel {
+        title,
+        particles,
+        exact,
+        x_desc,
+        y_desc,
+        line_label: "exact",
+    };
     let panels = [
-        Panel {
-            title: titles[0],
-            particles: &pr,
-            exact: exact[0],
-            x_desc: "x",
-            line_label: "exact",
-        },
-        Panel {
-            title: titles[1],
-            particles: &pv,
-            exact: exact[1],
-            x_desc: "x",
-            line_label: "exact",
-        },
-        Panel {
-            title: "pressure",
-            particles: &pp,
-            exact: exact[2],
-            x_desc: "x",
-            line_label: "exact",
-        },
-        Panel {
-            title: "specific internal energy",
-            particles: &pu,
-            exact: exact[3],
-            x_desc: "x",
-            line_label: "exact",
-        },
+        panel(titles[0], &pr, exact[0], "density (kg/m3)"),
+        panel(titles[1], &pv, exact[1], "velocity (m/s)"),
+        panel("pressure", &pp, exact[2], "pressure (Pa)"),
+        panel("specific internal energy", &pu, exact[3], "u (J/kg)"),
     ];
     let png = out.join("profile.png");
     profile_png(&png, caption, &panels).map_err(|e| io_err(&png, e))?;
@@ -287,6 +273,7 @@ fn verify_riemann<const D: usize>(
         sim,
         out,
         &caption,
+        "x (m)",
         &|i| p.pos[i][0],
         &|i| p.vel[i][0],
         ["density", "velocity"],

@@ -2,7 +2,8 @@
 //! body) and `loads.png` (one panel per body and component), written next to
 //! diagnostics.csv when the case has bodies; and the flow history of every port: `ports.csv`
 //! (t, then per port its mean pressure, volume flow into the fluid, and the exact mass in and
-//! out since the start) and `ports.png` (volume flow per port).
+//! out since the start) and `ports.png` (volume flow per port). Every column header and axis
+//! carries its unit (`crate::units`: a 2D case's force is per metre of depth, N/m).
 
 use crate::io::plot::{profile_png, Panel};
 use crate::sim::Simulation;
@@ -18,14 +19,23 @@ pub struct LoadHistory {
     port_rows: Vec<(f64, Vec<f64>)>,
 }
 
-/// Columns per port in ports.csv.
-const PORT_COLUMNS: [&str; 4] = ["mean_pressure", "volume_flow", "mass_in", "mass_out"];
+/// Columns per port in ports.csv, with their units in dimension `d`.
+fn port_columns(d: usize) -> [(&'static str, &'static str); 4] {
+    let u = crate::units::units(d);
+    [
+        ("mean_pressure", "Pa"),
+        ("volume_flow", u.volume_flow),
+        ("mass_in", u.mass),
+        ("mass_out", u.mass),
+    ]
+}
 
 impl LoadHistory {
     pub fn record<const D: usize>(&mut self, sim: &Simulation<D>) {
         if !sim.sys.ports.is_empty() {
             if self.ports.is_empty() {
                 self.ports = sim.sys.ports.iter().map(|p| p.name.clone()).collect();
+                self.dim = D;
             }
             let row = (0..sim.sys.ports.len())
                 .flat_map(|k| {
@@ -63,10 +73,11 @@ impl LoadHistory {
         let mut w = std::io::BufWriter::new(
             std::fs::File::create(&csv).map_err(|e| format!("{}: {e}", csv.display()))?,
         );
-        let mut header = vec!["t".to_string()];
+        let force = crate::units::units(self.dim).force;
+        let mut header = vec!["t [s]".to_string()];
         for n in &self.names {
             for a in &axes[..self.dim] {
-                header.push(format!("{n}.F{a}"));
+                header.push(format!("{n}.force_{a} [{force}]"));
             }
         }
         let mut text = header.join(",") + "\n";
@@ -90,10 +101,16 @@ impl LoadHistory {
                     .iter()
                     .map(|(t, f)| (*t, f[b * self.dim + k]))
                     .collect();
-                (format!("force on {n}, {} component vs t", axes[k]), pts)
+                (format!("force on {n}, {} component", axes[k]), pts)
             })
             .collect();
-        time_series_png(&dir.join("loads.png"), "Body loads (from the run)", &series)
+        let y = format!("force ({force})");
+        let caption = if self.dim == 2 {
+            "Body loads (from the run; 2D: per metre of depth)"
+        } else {
+            "Body loads (from the run)"
+        };
+        time_series_png(&dir.join("loads.png"), caption, &y, &series)
     }
 
     fn write_ports(&self, dir: &Path) -> Result<(), String> {
@@ -101,11 +118,12 @@ impl LoadHistory {
             return Ok(());
         }
         let csv = dir.join("ports.csv");
-        let mut text = std::iter::once("t".to_string())
+        let columns = port_columns(self.dim);
+        let mut text = std::iter::once("t [s]".to_string())
             .chain(
                 self.ports
                     .iter()
-                    .flat_map(|n| PORT_COLUMNS.map(|c| format!("{n}.{c}"))),
+                    .flat_map(|n| columns.map(|(c, u)| format!("{n}.{c} [{u}]"))),
             )
             .collect::<Vec<_>>()
             .join(",")
@@ -124,12 +142,18 @@ impl LoadHistory {
                     .map(|(t, r)| (*t, r[4 * k + 1]))
                     .collect();
                 (
-                    format!("volume flow into the fluid at port {} vs t", self.ports[k]),
+                    format!("volume flow into the fluid at port {}", self.ports[k]),
                     pts,
                 )
             })
             .collect();
-        time_series_png(&dir.join("ports.png"), "Port flows (from the run)", &series)
+        let y = format!("volume flow ({})", columns[1].1);
+        time_series_png(
+            &dir.join("ports.png"),
+            "Port flows (from the run)",
+            &y,
+            &series,
+        )
     }
 }
 
@@ -137,6 +161,7 @@ impl LoadHistory {
 fn time_series_png(
     path: &Path,
     title: &str,
+    y_desc: &str,
     series: &[(String, Vec<(f64, f64)>)],
 ) -> Result<(), String> {
     let panels: Vec<Panel<'_>> = series
@@ -146,6 +171,7 @@ fn time_series_png(
             particles: &[],
             exact: pts,
             x_desc: "t (s)",
+            y_desc,
             line_label: "sphfmu",
         })
         .collect();

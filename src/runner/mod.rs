@@ -114,8 +114,34 @@ pub struct RunSummary {
     /// without gravity this is the momentum the scheme fails to conserve (rpSPH; round-off for
     /// the conservative schemes).
     pub momentum_drift: f64,
+    /// P(t) − P(0) of the fluid (x, y, z).
+    pub momentum_change: [f64; 3],
+    /// The impulse of gravity on the fluid, Σ_steps M g dt (x, y, z).
+    pub gravity_impulse: [f64; 3],
+    /// The impulse of the bodies' walls on the fluid, −Σ_bodies (impulse of the fluid on the
+    /// body) (x, y, z).
+    pub wall_impulse: [f64; 3],
+    /// What the momentum check means for this case (see [`MomentumCheck`]).
+    pub momentum_check: MomentumCheck,
+    /// |ΔP − gravity impulse − wall impulse| / max(max_t Σ m|v|, |gravity impulse|, |wall
+    /// impulse|) when those are every external impulse (`MomentumCheck::Conservation` or
+    /// `Balance`): the scheme's own error.
+    pub momentum_residual: Option<f64>,
     pub list_build_seconds: f64,
     pub neighbour_list_builds: u64,
+}
+
+/// Which external impulses act on the fluid, and so what its momentum change means.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MomentumCheck {
+    /// No gravity, no bodies, no other boundary: momentum is the scheme's to conserve.
+    Conservation,
+    /// Gravity and/or bodies only: the change balances their impulses, which are known.
+    Balance,
+    /// Mirror walls, frozen layers, ports or a moving frame act on the fluid too, and their
+    /// impulse is not accumulated: the change is physical, and no balance is computed.
+    Boundaries,
 }
 
 /// Run `case` writing into `out`. `progress` is called after every step.
@@ -181,6 +207,22 @@ impl Snapshots {
     }
 }
 
+/// Which impulses act on the fluid of `case` (see [`MomentumCheck`]).
+fn momentum_check<const D: usize>(case: &Case, sim: &Simulation<D>) -> MomentumCheck {
+    use crate::domain::BoundaryKind;
+    let other = sim.sys.domain.kind.contains(&BoundaryKind::Reflect)
+        || case.domain.frozen_margin > 0.0
+        || !sim.sys.ports.is_empty()
+        || sim.sys.frame.is_some();
+    if other {
+        MomentumCheck::Boundaries
+    } else if sim.sys.gravity.norm() > 0.0 || !sim.sys.bodies.is_empty() {
+        MomentumCheck::Balance
+    } else {
+        MomentumCheck::Conservation
+    }
+}
+
 fn run_dim<const D: usize>(
     case: &Case,
     out: &Path,
@@ -188,7 +230,7 @@ fn run_dim<const D: usize>(
 ) -> Result<RunSummary, RunError> {
     let mut sim = case.build::<D>()?;
     let diag_path = out.join("diagnostics.csv");
-    let mut diag = DiagnosticsWriter::create(&diag_path).map_err(|e| io_err(&diag_path, e))?;
+    let mut diag = DiagnosticsWriter::create(&diag_path, D).map_err(|e| io_err(&diag_path, e))?;
     let mut snaps = Snapshots {
         dir: out.to_path_buf(),
         formats: case.output.formats.clone(),
@@ -207,6 +249,8 @@ fn run_dim<const D: usize>(
     let mut snap_index = 1u64;
     let mut diag_err = None;
     let mut max_abs_momentum: f64 = 0.0;
+    let mut gravity_impulse = [0.0f64; 3];
+    let mut t_prev = sim.time;
     let result = (|| -> Result<(), RunError> {
         while sim.time < t_end {
             // Targets by index (no accumulated rounding); a target within 1e-9 of t_end is t_end.
@@ -221,8 +265,20 @@ fn run_dim<const D: usize>(
             sim.advance_to(target, |s| {
                 updates += s.sys.particles.len() as f64;
                 let p = &s.sys.particles;
-                let scale: f64 = (0..p.len()).map(|i| p.mass[i] * p.vel[i].norm()).sum();
+                let fluid = |i: &usize| p.body[*i] == 0 && p.port[*i] == 0;
+                let scale: f64 = (0..p.len())
+                    .filter(fluid)
+                    .map(|i| p.mass[i] * p.vel[i].norm())
+                    .sum();
                 max_abs_momentum = max_abs_momentum.max(scale);
+                // every integrator applies g over the whole step: Σ_steps M g dt exactly (the
+                // step's own dt: last_dt skips the shortened steps that land on a target)
+                let mass: f64 = (0..p.len()).filter(fluid).map(|i| p.mass[i]).sum();
+                let dt = s.time - t_prev;
+                t_prev = s.time;
+                for k in 0..D {
+                    gravity_impulse[k] += mass * s.sys.gravity[k] * dt;
+                }
                 if s.steps % case.output.diagnostics_every == 0 {
                     if let Err(e) = diag.record(&s.diagnostics()) {
                         diag_err.get_or_insert(io_err(&diag_path, e));
@@ -308,9 +364,36 @@ fn run_dim<const D: usize>(
                 .sqrt();
             dp / max_abs_momentum.max(1e-300)
         },
+        momentum_change: std::array::from_fn(|k| last.momentum[k] - initial.momentum[k]),
+        gravity_impulse,
+        wall_impulse: std::array::from_fn(|k| {
+            -sim.sys
+                .bodies
+                .iter()
+                .map(|b| if k < D { b.impulse[k] } else { 0.0 })
+                .sum::<f64>()
+        }),
+        momentum_check: momentum_check(case, &sim),
+        momentum_residual: None,
         mean_h_iterations: sim.sys.stats.h_iterations_total / sim.sys.stats.h_solves.max(1) as f64,
         neighbour_list_builds: sim.sys.verlet.builds,
     };
+    if summary.momentum_check != MomentumCheck::Boundaries {
+        let r: f64 = (0..3)
+            .map(|k| {
+                let e = summary.momentum_change[k]
+                    - summary.gravity_impulse[k]
+                    - summary.wall_impulse[k];
+                e * e
+            })
+            .sum::<f64>()
+            .sqrt();
+        let norm = |a: &[f64; 3]| a.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let scale = max_abs_momentum
+            .max(norm(&summary.gravity_impulse))
+            .max(norm(&summary.wall_impulse));
+        summary.momentum_residual = Some(r / scale.max(1e-300));
+    }
     if let Some(v) = &case.verify {
         checks::verify(case, v, &sim, out, &mut summary)?;
     }

@@ -61,6 +61,22 @@ pub trait Scheme<const D: usize>: Send + Sync {
     }
 }
 
+/// Every scheme preset (`scheme.name`) with what it is, for `--help` and the case reference.
+/// Each preset's kernel, η, integrator and Courant factor come from [`SchemeConfig`] itself
+/// (`preferred_kernel`, `preferred_integrator`); a unit test checks each name parses.
+pub const PRESETS: [(&str, &str); 10] = [
+    ("standard", "traditional grad-h SPH, Monaghan-Gingold viscosity (alpha, beta) with the Balsara switch, optional Price conductivity; density summation or continuity (liquids; delta-SPH), laminar viscosity"),
+    ("rpsph", "relative-pressure SPH (Abel 2011): the standard passes with the pressure differences P_b - P_a in the force; gradient = own-h | symmetric, shock_switch"),
+    ("rosswog-f1", "Rosswog 2015 F1: integral-approximation gradients, volume element X = P^k (k = 0.05), triggered dissipation (shock and noise triggers)"),
+    ("rosswog-f2", "as F1 with kernel gradients and grad-h terms"),
+    ("rosswog-f3", "as F1 with X = m"),
+    ("rosswog-f4", "kernel gradients, X = m, constant dissipation K = 1: 'standard SPH' of the paper"),
+    ("crksph", "CRKSPH (Frontiere, Raskin & Owen 2017): linear reproducing kernels, compatible energy, limited viscosity"),
+    ("compsph", "compatibly differenced SPH (the CRKSPH paper's App. E): energy conserved to round-off"),
+    ("compsph-cullen", "compsph with the Cullen-Dehnen viscosity switch (App. F)"),
+    ("psph", "pressure-energy SPH (Hopkins 2015, after Saitoh & Makino) with Cullen-Dehnen viscosity (App. G); ideal gas only"),
+];
+
 /// `[scheme]` table of a case file.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "name", rename_all = "kebab-case", deny_unknown_fields)]
@@ -180,5 +196,17 @@ impl SchemeConfig {
 impl Default for SchemeConfig {
     fn default() -> Self {
         SchemeConfig::Standard(standard::StandardParams::default())
+    }
+}
+
+#[cfg(test)]
+mod preset_tests {
+    /// Every preset `--help` lists is a scheme a case can name.
+    #[test]
+    fn every_listed_preset_parses() {
+        for (name, _) in super::PRESETS {
+            let c: Result<super::SchemeConfig, _> = toml::from_str(&format!("name = {name:?}"));
+            assert!(c.is_ok(), "{name}: {:?}", c.err());
+        }
     }
 }
