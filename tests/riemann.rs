@@ -1,5 +1,5 @@
 //! The exact Riemann solver against Toro's tabulated star states (Toro 2009, Table 4.3) and
-//! the Sod wave positions computed independently with PyPI `sodshock` (peers.md §4.1).
+//! the Sod wave positions computed independently with PyPI `sodshock` (https://pypi.org/project/sodshock/0.1.9/).
 
 use sphfmu::verify::riemann::{ExactRiemann, Primitive};
 

@@ -1,6 +1,6 @@
 """Run the 2D Noh problem in PySPH (PSPH, the closest scheme with a cheap force loop, and
 its CRKSPH) and in sphfmu (standard SPH, models/noh2d.toml) in one run, and print
-particle-updates/s side by side with the ratio and L1(rho) for r < 0.5 (peers.md §1.3).
+particle-updates/s side by side with the ratio and L1(rho) for r < 0.5 (pysph/examples/gas_dynamics/noh.py).
 Called by tools/bench_peer.sh inside the PySPH venv."""
 import argparse
 import csv
@@ -60,7 +60,8 @@ def run_sphfmu(threads, outdir):
     s = json.load(open(os.path.join(outdir, "summary.json")))
     final = sorted(glob.glob(os.path.join(outdir, "snapshot_*.csv")))[-1]
     with open(final) as f:
-        rows = list(csv.DictReader(f))
+        # headers read `name [unit]`
+        rows = [{k.split(" [")[0]: v for k, v in q.items()} for q in csv.DictReader(f)]
     x = np.array([float(q["x"]) for q in rows])
     y = np.array([float(q["y"]) for q in rows])
     rho = np.array([float(q["rho"]) for q in rows])

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Side-by-side benchmark against PySPH on the 2D Noh problem (100^2 particles, gamma = 5/3,
 # t = 0.6), both codes in this one run on this machine. Installs PySPH 1.0b2 from PyPI into
-# target/peer-venv the first time (about 3.5 minutes; see ../shared/spec/peers.md §1.1).
+# target/peer-venv the first time (about 3.5 minutes: PySPH's sdist compiles its Cython;
+# https://pypi.org/project/PySPH/1.0b2/).
 # Usage: tools/bench_peer.sh [--threads N] [--schemes psph,crksph]
 #   (default: all cores for both codes; PySPH's psph and crksph schemes — crksph takes ~7 min)
 set -euo pipefail

@@ -1,6 +1,6 @@
 //! sphfmu as an FMU: the FMI 3.0 and FMI 2.0 co-simulation C APIs over the library's
 //! `Coupling` interface, hand-written (rust-fmi's exporter is FMI 3.0 only and aborts on FMU
-//! state calls, see ../shared/spec/fmi-zenoh.md). One binary exports both APIs; the packager
+//! state calls with `todo!()`: crates.io fmi-export 0.3.0, checked 2026). One binary exports both APIs; the packager
 //! (`src/bin/package.rs`, `make fmu`) writes `sphfmu.fmu` (3.0) and `sphfmu-fmi2.fmu` (2.0)
 //! around it.
 //!

@@ -21,13 +21,19 @@ def sod_run(sphfmu_bin, models, tmp_path_factory):
 
 
 def read_csv(path):
+    """Columns by name; the headers read `name [unit]`, and the unit is checked apart."""
     with open(path) as f:
         rows = list(csv.DictReader(f))
-    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+    return {k.split(" [")[0]: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+
+
+def header(path):
+    with open(path) as f:
+        return f.readline().strip().split(",")
 
 
 def test_sod_against_sodshock(sod_run):
-    sodshock = pytest.importorskip("sodshock")
+    import sodshock  # pinned in requirements.txt: missing is a failure, not a skip
     out, _ = sod_run
     summary = json.loads((out / "summary.json").read_text())
     final = sorted(out.glob("snapshot_*.csv"))[-1]
@@ -88,11 +94,62 @@ def test_every_model_builds(sphfmu_bin, models, case):
     assert "particles" in r.stdout
 
 
-def test_run_help_lists_the_presets(sphfmu_bin):
+PRESETS = ["standard", "rpsph", "rosswog-f1", "rosswog-f2", "rosswog-f3", "rosswog-f4", "crksph",
+           "compsph", "compsph-cullen", "psph"]
+KERNELS = ["cubic-spline", "quartic-spline", "quintic-spline", "septic-spline", "wendland-c2",
+           "wendland-c4", "wendland-c6", "sinc", "liq", "qcm6", "psph-quintic"]
+
+
+def test_run_help_describes_every_preset_and_kernel(sphfmu_bin):
     r = run([sphfmu_bin, "run", "--help"])
     assert r.returncode == 0
-    for preset in ("standard", "rpsph", "rosswog-f1", "rosswog-f2", "rosswog-f3", "rosswog-f4"):
-        assert preset in r.stdout, preset
+    lines = r.stdout.splitlines()
+    # each preset and kernel opens a line of its own with its description (and defaults)
+    for name in PRESETS + KERNELS:
+        line = next((l for l in lines if l.split() and l.split()[0] == name), None)
+        assert line is not None and len(line.split()) > 3, name
+    assert "per metre of depth" in r.stdout
+
+
+@pytest.mark.parametrize("binary, args", [
+    ("sphfmu", ["--help"]), ("sphfmu", ["run", "--help"]), ("sphfmu", ["check", "--help"]),
+    ("sphfmu", ["kernels", "--help"]), ("sphfmu", ["bench", "--help"]),
+    ("sphfmu-package", ["--help"]), ("sphfmu-serve", ["--help"]), ("sphfmu", ["serve", "--help"]),
+])
+def test_every_binary_has_help_that_exits_0(sphfmu_bin, binary, args):
+    exe = pathlib.Path(sphfmu_bin).with_name(binary)
+    r = run([str(exe), *args], cwd=ROOT)
+    assert r.returncode == 0, r.stderr
+    assert "Usage:" in r.stdout, r.stdout
+
+
+def test_package_refuses_a_missing_case_with_one_line(sphfmu_bin, tmp_path):
+    exe = pathlib.Path(sphfmu_bin).with_name("sphfmu-package")
+    r = run([str(exe), "--case", str(tmp_path / "none.toml"), "--out", str(tmp_path)], cwd=ROOT)
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("sphfmu-package: --case:"), r.stderr
+
+
+def test_summary_lines_say_what_they_measure(sod_run, sphfmu_bin, models, tmp_path):
+    _, stdout = sod_run
+    # Sod's mirror walls push on the gas: its momentum change is their impulse, named so
+    assert "momentum change [1.3500e-1] kg/(m.s): the impulse of the domain's mirror walls" in stdout
+    assert "total energy (kinetic + internal)" in stdout
+    # the closed tank has gravity and a body only, so the change balances their impulses
+    # (measured residual 4.3e-15 over 1 s; the 0.2 s here: round-off too)
+    case = tmp_path / "tank.toml"
+    case.write_text((models / "closed-tank2d.toml").read_text().replace("t_end = 1.0", "t_end = 0.2"))
+    r = run([sphfmu_bin, "run", str(case), "--out", str(tmp_path / "out"), "--quiet"])
+    assert r.returncode == 0, r.stderr
+    line = next(l for l in r.stdout.splitlines() if l.startswith("momentum balance:"))
+    residual = float(line.split("residual ")[1].split()[0])
+    assert residual < 1e-13, line
+    assert "kinetic + internal + potential in gravity" in r.stdout
+    assert "N/m" in r.stdout and "per metre of depth" in r.stdout
+    assert header(tmp_path / "out" / "bodies.csv")[:3] == ["t [s]", "tank.force_x [N/m]", "tank.force_y [N/m]"]
+    d = header(tmp_path / "out" / "diagnostics.csv")
+    assert "mass [kg/m]" in d and "potential [J/m]" in d and "total [J/m]" in d
 
 
 @pytest.mark.parametrize("args, needle", [

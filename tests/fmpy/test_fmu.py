@@ -60,6 +60,63 @@ def test_fmpy_info_lists_every_variable(fmu):
     assert units["piston.force"] == "N/m" and units["gravity"] == "m/s2"
 
 
+@pytest.mark.parametrize("fmu, case, fmi", [(FMU3, "free-piston2d", "3.0"), (FMU2, "free-piston2d", "2.0"),
+                                           (TANK3, "closed-tank2d", "3.0")],
+                         ids=["fmi3", "fmi2", "tank-fmi3"])
+def test_model_description_names_the_case_with_metadata(fmu, case, fmi):
+    md = read_model_description(str(fmu))
+    assert md.fmiVersion == fmi and md.modelName == case
+    assert md.description and md.description != "sphfmu"
+    assert md.author and md.license == "MIT OR Apache-2.0"
+    assert md.generationTool.startswith("sphfmu-package ")
+    # xs:dateTime in UTC
+    import datetime
+    when = datetime.datetime.strptime(md.generationDateAndTime, "%Y-%m-%dT%H:%M:%SZ")
+    assert when.year >= 2026
+    by_name = {v.name.split("[")[0]: v for v in md.modelVariables}
+    # a 2D force is per metre of depth, in its unit and in its quantity
+    force = next(n for n in by_name if n.endswith(".force"))
+    assert by_name[force].unit == "N/m" and by_name[force].quantity == "ForcePerDepth"
+    assert by_name["gravity"].quantity == "Acceleration"
+
+
+def test_packaged_binary_is_stripped():
+    import zipfile
+    with zipfile.ZipFile(FMU3) as z:
+        so = z.read("binaries/x86_64-linux/sphfmu.so")
+    # no symbol table (.symtab): the dynamic symbols the master resolves stay (.dynsym)
+    names = elf_section_names(so)
+    assert ".dynsym" in names and ".symtab" not in names, names
+
+
+def elf_section_names(b):
+    """Section names of a little-endian ELF64 file."""
+    import struct
+    shoff, = struct.unpack_from("<Q", b, 0x28)
+    shentsize, shnum, shstrndx = struct.unpack_from("<HHH", b, 0x3A)
+    def section(i):
+        return struct.unpack_from("<IIQQQQ", b, shoff + i * shentsize)
+    strtab = section(shstrndx)
+    names = []
+    for i in range(shnum):
+        name_off = section(i)[0]
+        start = strtab[4] + name_off
+        names.append(b[start:b.index(b"\0", start)].decode())
+    return names
+
+
+def test_a_case_packaged_without_out_goes_to_its_own_folder(tmp_path):
+    case = tmp_path / "my-tank.toml"
+    case.write_text((ROOT / "models" / "closed-tank2d.toml").read_text()
+                    .replace('name = "closed-tank2d"', 'name = "my-tank"\nauthor = "A. User"'))
+    exe = ROOT / "target" / "release" / "sphfmu-package"
+    p = subprocess.run([str(exe), "--case", str(case), "--lib", str(ROOT / "target/release/libsphfmu_fmu.so"),
+                        "--models", str(ROOT / "models")], cwd=tmp_path, capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    md = read_model_description(str(tmp_path / "target" / "fmu" / "my-tank" / "sphfmu.fmu"))
+    assert md.modelName == "my-tank" and md.author == "A. User"
+
+
 def test_tank_force_follows_a_gravity_signal():
     r = session("tank_gravity", fmu_path=str(TANK3))
     print(r)

@@ -391,7 +391,7 @@ impl Table {
                 Kind::Float64,
                 1,
                 Some(u.energy),
-                "Fluid kinetic plus internal energy",
+                "Fluid kinetic + internal + potential energy in gravity (2D: per metre of depth)",
                 Binding::Energy,
             ),
         ];
