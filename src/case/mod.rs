@@ -3,6 +3,7 @@
 
 mod bodies;
 mod checks;
+mod estimate;
 mod glass;
 mod ics;
 mod ports;
@@ -16,6 +17,7 @@ pub use probes::{MarkerConfig, PatchConfig, ProbeConfig};
 
 pub use bodies::BodyConfig;
 pub use checks::{Blast, Verify};
+pub use estimate::{available_memory, Limits, SizeEstimate};
 pub use glass::GlassConfig;
 pub use ics::generate_particles;
 pub use ports::{OpeningConfig, PortConfig};
@@ -97,6 +99,9 @@ pub struct Case {
     /// Openings in bodies where an outside model sets the pressure (`boundary::ports`).
     #[serde(default, rename = "port")]
     pub ports: Vec<PortConfig>,
+    /// Caps on the run's size, checked before anything is allocated (`estimate.rs`).
+    #[serde(default)]
+    pub limits: Limits,
 }
 
 fn one_line(s: &str) -> String {
@@ -241,6 +246,8 @@ impl Case {
                 self.case.dimension
             )));
         }
+        // the size first: nothing is allocated for a case that cannot fit
+        self.check_resources(&self.limits)?;
         let mut lo = [0.0; D];
         let mut hi = [0.0; D];
         let mut kind = [BoundaryKind::Open; D];

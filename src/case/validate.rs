@@ -34,6 +34,7 @@ impl Case {
             )));
         }
         self.eos.validate()?;
+        self.limits.validate()?;
         let eta = self.eta()?;
         if !(eta.is_finite() && (0.5..=5.0).contains(&eta)) {
             return Err(CaseError(format!(

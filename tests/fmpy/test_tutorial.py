@@ -28,7 +28,7 @@ def test_the_tutorial_runs_from_start_to_finish(tmp_path):
         elif lang == "bash":
             script.append(f"echo '### tutorial block {i}'\n{body}")
     assert files == 3 and len(script) > 8
-    env = {**os.environ, "SPHFMU": str(ROOT), "NO_COLOR": "1", "HOME": str(tmp_path)}
+    env = {**os.environ, "SPHFMU": str(ROOT), "NO_COLOR": "1"}
     r = subprocess.run(["bash", "-c", "\n".join(script)], cwd=tmp_path, env=env,
                        capture_output=True, text=True, timeout=1200)
     print(r.stdout[-6000:])
