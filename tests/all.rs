@@ -7,6 +7,7 @@ mod common;
 
 mod bodies;
 mod case_errors;
+mod case_size;
 mod conservation;
 mod coupling;
 mod crk_reproducing;

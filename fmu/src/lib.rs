@@ -22,3 +22,18 @@ pub mod units;
 mod values;
 pub mod xml;
 pub mod zenoh_settings;
+
+/// `name` with every character but ASCII letters, digits, '-', '_' and '.' replaced by '_':
+/// safe as a folder name (the packager's output) and as one zenoh key chunk (the default
+/// prefix of an instance).
+pub fn plain_name(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "-_.".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}

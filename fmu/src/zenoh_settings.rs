@@ -104,16 +104,7 @@ impl ZenohSettings {
     /// The prefix in force for an instance called `instance`.
     pub fn prefix_for(&self, instance: &str) -> String {
         if self.prefix.is_empty() {
-            let clean: String = instance
-                .chars()
-                .map(|c| {
-                    if c.is_ascii_alphanumeric() || "-_.".contains(c) {
-                        c
-                    } else {
-                        '_'
-                    }
-                })
-                .collect();
+            let clean = crate::plain_name(instance);
             format!("sphfmu/{}", if clean.is_empty() { "fmu" } else { &clean })
         } else {
             self.prefix.clone()

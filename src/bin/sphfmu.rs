@@ -86,7 +86,8 @@ enum Command {
         #[arg(long)]
         scheme: Option<String>,
     },
-    /// Validate a case file without running it.
+    /// Validate a case file without running it: every key, and its size (particles and
+    /// memory, estimated without allocating) against the machine and the case's [limits].
     Check {
         case: PathBuf,
         /// Also generate the particles and evaluate the initial state.
@@ -264,7 +265,16 @@ fn main() -> ExitCode {
                         Err(e) => return fail(2, format!("{}: {e}", case.display())),
                     }
                 } else {
-                    println!("{}: ok", case.display());
+                    // the size checks of a build, without allocating
+                    match c.check_resources(&c.limits) {
+                        Ok(e) => println!(
+                            "{}: ok (about {:.0} particles, {:.2} GB)",
+                            case.display(),
+                            e.particles,
+                            e.bytes / 1e9
+                        ),
+                        Err(e) => return fail(2, format!("{}: {e}", case.display())),
+                    }
                 }
                 ExitCode::SUCCESS
             }

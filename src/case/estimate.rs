@@ -6,7 +6,7 @@
 //! 1e8 particles is refused in milliseconds with the estimate in the message instead of
 //! growing the process until the operating system kills it.
 
-use super::{Case, CaseError, Lattice, Region};
+use super::{Case, CaseError, Lattice, Region, Shape};
 use crate::boundary::geometry::Shape as BodyShape;
 use crate::domain::BoundaryKind;
 use serde::{Deserialize, Serialize};
@@ -52,14 +52,15 @@ pub struct SizeEstimate {
     pub bytes: f64,
 }
 
-/// Bytes per particle besides its neighbour lists, by dimension: the particle arrays (about
-/// 14 + 6D numbers), the integrator's saved stage (2D + 2), the scheme's per-particle buffers
-/// and the cell grid. Measured as the peak resident memory of `sphfmu bench --steps 2` at 1e5
-/// and 1e6 particles, less the neighbour entries below (fit in the comment of `BYTES_PER_PAIR`).
-const BYTES_PER_PARTICLE: [f64; 3] = [700.0, 900.0, 1100.0];
-/// Bytes per neighbour-list entry and neighbour: the master list with its skin and the working
-/// list cut from it (4 bytes each) and the per-pair buffers of the force pass.
-const BYTES_PER_PAIR: f64 = 24.0;
+/// Bytes per particle besides its neighbour lists, by dimension (particle arrays, integrator
+/// stage, scheme buffers, cell grid), and bytes per neighbour of each particle (the master list
+/// with its skin, the working list, per-pair buffers). Fitted to the growth of the peak
+/// resident memory (`/usr/bin/time -f %M sphfmu bench --steps 2`) from 1e5 to 4e5 particles,
+/// standard SPH: 2D M4 (20 neighbours) 713 B per particle, 2D Wendland C4 (44) 1155 B, 3D M4
+/// (62.8) 1544 B: 18.4 B per neighbour, 345 B (2D) and 389 B (3D) besides. The constants
+/// round both up by 15–20 % for the schemes that keep more per particle (CRKSPH's moments).
+const BYTES_PER_PARTICLE: [f64; 3] = [400.0, 450.0, 500.0];
+const BYTES_PER_PAIR: f64 = 20.0;
 /// Wall-placement lattice points beyond which the set-up alone would take minutes.
 const MAX_WALL_CANDIDATES: f64 = 1e10;
 
@@ -71,12 +72,14 @@ fn lattice_count(lattice: Lattice, d: usize, lo: &[f64], hi: &[f64], a: f64) -> 
         return (0..d).map(|k| n(len(k), a)).product();
     }
     let ny = n(len(1), 0.5 * 3f64.sqrt() * a);
+    // even row and layer counts (periodic tiling), as ics::lattice_points
     let nz = if d == 3 {
-        n(len(2), (2.0f64 / 3.0).sqrt() * a)
+        let nz = n(len(2), (2.0f64 / 3.0).sqrt() * a);
+        nz + nz % 2.0
     } else {
         1.0
     };
-    n(len(0), a) * (ny + ny % 2.0) * (nz + nz % 2.0)
+    n(len(0), a) * (ny + ny % 2.0) * nz
 }
 
 impl Case {
@@ -102,7 +105,7 @@ impl Case {
         let d = self.case.dimension;
         let mut fluid = 0.0;
         let mut finest = f64::INFINITY;
-        for r in &self.regions {
+        let clipped = |r: &Region| {
             let (mut lo, mut hi) = self.region_box(r);
             for k in 0..d.min(lo.len()).min(hi.len()) {
                 if self.domain.boundary.get(k) != Some(&BoundaryKind::Open) {
@@ -110,9 +113,31 @@ impl Case {
                     hi[k] = hi[k].min(self.domain.max[k]);
                 }
             }
+            (lo, hi)
+        };
+        let volume = |lo: &[f64], hi: &[f64]| -> f64 {
+            (0..d).map(|k| (hi[k] - lo[k]).max(0.0)).product()
+        };
+        for (i, r) in self.regions.iter().enumerate() {
+            let (lo, hi) = clipped(r);
             let a = self.region_spacing(r);
             finest = finest.min(a);
-            fluid += lattice_count(r.lattice, d, &lo, &hi, a);
+            let mut share = match r.shape {
+                Shape::Box => 1.0,
+                // a ball's share of its bounding box
+                Shape::Sphere => [1.0, std::f64::consts::FRAC_PI_4, std::f64::consts::PI / 6.0]
+                    [d.clamp(1, 3) - 1],
+            };
+            // later box regions replace this one where they overlap (spheres are left out, so
+            // the sum stays an upper bound)
+            let own = volume(&lo, &hi).max(1e-300);
+            for later in self.regions[i + 1..].iter().filter(|r| r.shape == Shape::Box) {
+                let (l2, h2) = clipped(later);
+                let lo_x: Vec<f64> = (0..d).map(|k| lo[k].max(l2[k])).collect();
+                let hi_x: Vec<f64> = (0..d).map(|k| hi[k].min(h2[k])).collect();
+                share -= volume(&lo_x, &hi_x) / own;
+            }
+            fluid += lattice_count(r.lattice, d, &lo, &hi, a) * share.max(0.0);
         }
         let eta = self.eta().unwrap_or(1.2);
         let (mut walls, mut candidates) = (0.0, 0.0);
@@ -148,7 +173,7 @@ impl Case {
                 e.particles, e.fluid, e.walls, crate::neighbours::MAX_PARTICLES
             )));
         }
-        if !(e.wall_candidates <= MAX_WALL_CANDIDATES) {
+        if e.wall_candidates.is_nan() || e.wall_candidates > MAX_WALL_CANDIDATES {
             return Err(CaseError(format!(
                 "body: placing the wall particles would visit about {:.3e} lattice points (limit {MAX_WALL_CANDIDATES:.0e}); a body's extent is too large for its spacing",
                 e.wall_candidates

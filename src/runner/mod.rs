@@ -276,8 +276,8 @@ fn run_dim<const D: usize>(
                 let mass: f64 = (0..p.len()).filter(fluid).map(|i| p.mass[i]).sum();
                 let dt = s.time - t_prev;
                 t_prev = s.time;
-                for k in 0..D {
-                    gravity_impulse[k] += mass * s.sys.gravity[k] * dt;
+                for (k, g) in gravity_impulse.iter_mut().enumerate().take(D) {
+                    *g += mass * s.sys.gravity[k] * dt;
                 }
                 if s.steps % case.output.diagnostics_every == 0 {
                     if let Err(e) = diag.record(&s.diagnostics()) {

@@ -57,16 +57,7 @@ Example:
 
 /// A case name as a folder name: letters, digits, '-', '_' and '.' kept, the rest '_'.
 fn folder_name(name: &str) -> String {
-    let s: String = name
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || "-_.".contains(c) {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
+    let s = sphfmu_fmu::plain_name(name);
     if s.is_empty() || s.chars().all(|c| c == '.') {
         "case".into()
     } else {
