@@ -233,6 +233,20 @@ impl<const D: usize> Simulation<D> {
         t: f64,
         mut on_step: impl FnMut(&Self),
     ) -> Result<(), SolverError> {
+        self.advance_while(t, |s| {
+            on_step(s);
+            true
+        })
+    }
+
+    /// Advance towards time t like [`Self::advance_to`], asking `go_on` after every step
+    /// whether to take the next: a bounded co-simulation step stops where its step count or
+    /// wall-clock budget runs out (then `self.time < t`, and the state is a whole step's).
+    pub fn advance_while(
+        &mut self,
+        t: f64,
+        mut go_on: impl FnMut(&Self) -> bool,
+    ) -> Result<(), SolverError> {
         while self.time < t {
             let remaining = t - self.time;
             // Avoid a sliver step: split the last two steps evenly.
@@ -246,7 +260,9 @@ impl<const D: usize> Simulation<D> {
             if (t - self.time).abs() <= 1e-12 * t.abs().max(1.0) {
                 self.time = t;
             }
-            on_step(self);
+            if !go_on(self) && self.time < t {
+                break;
+            }
         }
         Ok(())
     }

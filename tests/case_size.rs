@@ -30,7 +30,11 @@ fn the_estimate_follows_the_particle_count_of_every_model() {
         let e = c.estimate();
         let n = built_particles(&c) as f64;
         let ratio = e.particles / n;
-        println!("{}: estimate {:.0}, built {n}, ratio {ratio:.3}", p.display(), e.particles);
+        println!(
+            "{}: estimate {:.0}, built {n}, ratio {ratio:.3}",
+            p.display(),
+            e.particles
+        );
         if (ratio - 1.0).abs() > (worst.0 - 1.0).abs() {
             worst = (ratio, p.display().to_string());
         }
@@ -86,17 +90,29 @@ fn the_case_and_the_caller_can_cap_the_size() {
         max_memory: None,
     };
     let e = c.build::<2>().err().unwrap();
-    assert!(e.0.starts_with("limits.max_particles: the case needs about"), "{}", e.0);
+    assert!(
+        e.0.starts_with("limits.max_particles: the case needs about"),
+        "{}",
+        e.0
+    );
     c.limits = Limits {
         max_particles: None,
         max_memory: Some(1e5),
     };
     let e = c.build::<2>().err().unwrap();
-    assert!(e.0.starts_with("limits.max_memory:") && e.0.contains("GB"), "{}", e.0);
+    assert!(
+        e.0.starts_with("limits.max_memory:") && e.0.contains("GB"),
+        "{}",
+        e.0
+    );
     // and as case keys, checked like every key
     let bad = model_text("tank2d.toml") + "\n[limits]\nmax_memory = -1.0\n";
     let e = Case::parse(&bad).err().unwrap();
-    assert!(e.0.contains("limits.max_memory: must be a finite number of bytes > 0"), "{}", e.0);
+    assert!(
+        e.0.contains("limits.max_memory: must be a finite number of bytes > 0"),
+        "{}",
+        e.0
+    );
     let ok = model_text("tank2d.toml") + "\n[limits]\nmax_particles = 100000\nmax_memory = 2e9\n";
     assert!(Case::parse(&ok).unwrap().build::<2>().is_ok());
 }

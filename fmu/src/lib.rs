@@ -7,21 +7,13 @@
 //! No global mutable state: everything lives in the instance the master holds, each with its
 //! own rayon pool; every entry point catches panics.
 
-#[cfg(feature = "zenoh")]
+// The crate's rooms: the C faces, one instance behind them, the variable table, the
+// packaging of .fmu archives, and the zenoh bridge.
+pub mod abi;
 pub mod bridge;
-pub mod ffi;
-pub mod fmi2;
-pub mod fmi3;
-pub mod inputs;
-mod live;
-pub mod model;
-mod solver;
-pub mod state_ffi;
+pub mod instance;
+pub mod packaging;
 pub mod table;
-pub mod units;
-mod values;
-pub mod xml;
-pub mod zenoh_settings;
 
 /// `name` with every character but ASCII letters, digits, '-', '_' and '.' replaced by '_':
 /// safe as a folder name (the packager's output) and as one zenoh key chunk (the default

@@ -117,8 +117,8 @@ enum Command {
         #[arg(long)]
         json: Option<PathBuf>,
     },
-    /// Serve a case over zenoh (step, get, set, save_state, restore_state, snapshot): runs
-    /// `sphfmu-serve` from the same folder (built with the FMU crate, which has zenoh; the
+    /// Serve a case over zenoh (step, get, set, save_state, restore_state, reset, snapshot):
+    /// runs `sphfmu-serve` from the same folder in this process's place (built with the FMU crate, which has zenoh; the
     /// core library does not). `sphfmu serve --help` lists its options.
     #[command(disable_help_flag = true)]
     Serve {
@@ -140,6 +140,15 @@ fn serve(args: &[String]) -> ExitCode {
             "serve: sphfmu-serve is not next to sphfmu; build it with `cargo build --release --workspace` (or `make fmu`)",
         );
     };
+    // exec: the node replaces this process (same pid), so SIGTERM, SIGINT, SIGHUP or SIGKILL
+    // to `sphfmu serve` reach the node itself and no orphan child keeps its port
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::CommandExt;
+        let e = std::process::Command::new(&node).args(args).exec();
+        fail(1, format!("serve: cannot run {}: {e}", node.display()))
+    }
+    #[cfg(not(unix))]
     match std::process::Command::new(&node).args(args).status() {
         Ok(s) => ExitCode::from(s.code().unwrap_or(1).clamp(0, 255) as u8),
         Err(e) => fail(1, format!("serve: cannot run {}: {e}", node.display())),

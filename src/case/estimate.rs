@@ -115,9 +115,8 @@ impl Case {
             }
             (lo, hi)
         };
-        let volume = |lo: &[f64], hi: &[f64]| -> f64 {
-            (0..d).map(|k| (hi[k] - lo[k]).max(0.0)).product()
-        };
+        let volume =
+            |lo: &[f64], hi: &[f64]| -> f64 { (0..d).map(|k| (hi[k] - lo[k]).max(0.0)).product() };
         for (i, r) in self.regions.iter().enumerate() {
             let (lo, hi) = clipped(r);
             let a = self.region_spacing(r);
@@ -131,7 +130,10 @@ impl Case {
             // later box regions replace this one where they overlap (spheres are left out, so
             // the sum stays an upper bound)
             let own = volume(&lo, &hi).max(1e-300);
-            for later in self.regions[i + 1..].iter().filter(|r| r.shape == Shape::Box) {
+            for later in self.regions[i + 1..]
+                .iter()
+                .filter(|r| r.shape == Shape::Box)
+            {
                 let (l2, h2) = clipped(later);
                 let lo_x: Vec<f64> = (0..d).map(|k| lo[k].max(l2[k])).collect();
                 let hi_x: Vec<f64> = (0..d).map(|k| hi[k].min(h2[k])).collect();
@@ -217,7 +219,14 @@ fn body_measures(shape: &BodyShape, d: usize, t: f64) -> (f64, f64) {
     let box_surface = |lo: &[f64], hi: &[f64], top: bool| -> f64 {
         let s: Vec<f64> = (0..d).map(|k| (hi[k] - lo[k]).abs() + 2.0 * t).collect();
         let faces: f64 = (0..d)
-            .map(|k| 2.0 * s.iter().enumerate().filter(|(j, _)| *j != k).map(|(_, x)| x).product::<f64>())
+            .map(|k| {
+                2.0 * s
+                    .iter()
+                    .enumerate()
+                    .filter(|(j, _)| *j != k)
+                    .map(|(_, x)| x)
+                    .product::<f64>()
+            })
             .sum();
         let top_face: f64 = s[..d - 1].iter().product();
         if top {

@@ -3,7 +3,7 @@
 
 use super::{
     sampling, state, BodyKinematics, BodyLoads, CouplingError, ParticleKind, ParticleState,
-    PatchMembers, PatchValue, PortValue, ProbeValue, StepReport,
+    PatchMembers, PatchValue, PortValue, ProbeValue, StepLimit, StepReport,
 };
 use crate::boundary::geometry::Shape;
 use crate::boundary::kinematics::{HeldPose, Pose};
@@ -17,7 +17,7 @@ pub(super) trait Engine: Send + Sync {
     fn set_gravity(&mut self, g: &[f64; 3]);
     fn body(&self, b: usize) -> BodyKinematics;
     fn set_body(&mut self, b: usize, k: &BodyKinematics);
-    fn advance_to(&mut self, t: f64) -> Result<StepReport, SolverError>;
+    fn advance_to(&mut self, t: f64, chunk: &Chunk) -> Result<StepReport, SolverError>;
     fn loads(&self) -> Vec<BodyLoads>;
     fn set_port_pressure(&mut self, k: usize, p: f64);
     fn ports(&self) -> Vec<PortValue>;
@@ -43,6 +43,13 @@ pub(super) fn build(case: &Case) -> Result<Box<dyn Engine>, CouplingError> {
             )))
         }
     })
+}
+
+/// How much of a bounded step one call of [`Engine::advance_to`] may take (plain numbers, so
+/// it crosses into the pool's threads).
+pub(super) struct Chunk {
+    pub max_steps: Option<u64>,
+    pub max_seconds: Option<f64>,
 }
 
 /// A patch as the case gives it, resolved to its body.
@@ -122,7 +129,7 @@ impl<const D: usize> Engine for Coupled<D> {
         body.held = held;
     }
 
-    fn advance_to(&mut self, t: f64) -> Result<StepReport, SolverError> {
+    fn advance_to(&mut self, t: f64, chunk: &Chunk) -> Result<StepReport, SolverError> {
         if self.dirty && t > self.sim.time {
             self.sim.reevaluate()?;
             self.dirty = false;
@@ -133,12 +140,27 @@ impl<const D: usize> Engine for Coupled<D> {
             ..StepReport::default()
         };
         let mut before = self.sim.time;
-        self.sim.advance_to(t, |s| {
+        let clock = std::time::Instant::now();
+        self.sim.advance_while(t, |s| {
             let dt = s.time - before;
             before = s.time;
             report.dt_min = report.dt_min.min(dt);
             report.dt_max = report.dt_max.max(dt);
+            let steps = s.steps - start;
+            if chunk.max_steps.is_some_and(|m| steps >= m) {
+                report.stopped = Some(StepLimit::Steps(steps));
+                return false;
+            }
+            let seconds = clock.elapsed().as_secs_f64();
+            if chunk.max_seconds.is_some_and(|m| seconds >= m) {
+                report.stopped = Some(StepLimit::Seconds(seconds));
+                return false;
+            }
+            true
         })?;
+        if self.sim.time >= t {
+            report.stopped = None;
+        }
         report.steps = self.sim.steps - start;
         if report.steps == 0 {
             report.dt_min = 0.0;

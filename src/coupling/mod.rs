@@ -14,6 +14,7 @@
 //! already has changes nothing, so repeating inputs keeps runs identical.
 
 mod engine;
+mod integrity;
 pub mod sampling;
 pub mod state;
 
@@ -54,6 +55,8 @@ pub struct CouplingOptions {
     pub cfl: Option<f64>,
     /// Worker threads of this instance's pool (0 = one per core).
     pub threads: usize,
+    /// Size limits replacing the case's `[limits]` where set (the FMU's `limits.*`).
+    pub limits: crate::case::Limits,
 }
 
 impl Default for CouplingOptions {
@@ -63,6 +66,7 @@ impl Default for CouplingOptions {
             resolution: 1.0,
             cfl: None,
             threads: 0,
+            limits: Default::default(),
         }
     }
 }
@@ -95,6 +99,12 @@ impl CouplingOptions {
                 return Err(CouplingError(format!("cfl: must be in (0, 1], got {c}")));
             }
             case.time.cfl = Some(c);
+        }
+        if let Some(m) = self.limits.max_particles {
+            case.limits.max_particles = Some(m);
+        }
+        if let Some(m) = self.limits.max_memory {
+            case.limits.max_memory = Some(m);
         }
         case.validate()?;
         Ok(case)
@@ -192,6 +202,28 @@ pub struct StepReport {
     pub steps: u64,
     pub dt_min: f64,
     pub dt_max: f64,
+    /// Set when a [`StepBudget`] ran out before the target time: the state is then that of
+    /// the last whole internal step (`Coupling::time`).
+    pub stopped: Option<StepLimit>,
+}
+
+/// Which budget stopped a bounded step, and how much of it was used.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StepLimit {
+    /// Internal steps taken.
+    Steps(u64),
+    /// Wall-clock seconds spent.
+    Seconds(f64),
+}
+
+/// Bounds on one [`Coupling::step_within`] (None: unbounded) and a progress callback,
+/// called on the caller's thread with (time, internal steps, wall seconds) after every second
+/// of wall clock the step takes.
+#[derive(Default)]
+pub struct StepBudget<'a> {
+    pub max_steps: Option<u64>,
+    pub max_seconds: Option<f64>,
+    pub progress: Option<&'a mut dyn FnMut(f64, u64, f64)>,
 }
 
 pub struct Coupling {
@@ -295,14 +327,30 @@ impl Coupling {
 
     /// Uniform gravity from now on. Entries must be finite and 0 beyond the dimension.
     pub fn set_gravity(&mut self, g: [f64; 3]) -> Result<(), CouplingError> {
-        check_vector("gravity", &g, self.dimension())?;
+        self.check_gravity(&g)?;
         self.engine.set_gravity(&g);
         Ok(())
+    }
+
+    /// Whether [`Self::set_gravity`] would take `g` (it changes nothing).
+    pub fn check_gravity(&self, g: &[f64; 3]) -> Result<(), CouplingError> {
+        check_vector("gravity", g, self.dimension())
     }
 
     /// Pose and velocities of body `body` from now on (its motion must be `external`).
     pub fn set_body_kinematics(
         &mut self,
+        body: usize,
+        k: &BodyKinematics,
+    ) -> Result<(), CouplingError> {
+        self.check_body_kinematics(body, k)?;
+        self.engine.set_body(body, k);
+        Ok(())
+    }
+
+    /// Whether [`Self::set_body_kinematics`] would take `k` for `body` (it changes nothing).
+    pub fn check_body_kinematics(
+        &self,
         body: usize,
         k: &BodyKinematics,
     ) -> Result<(), CouplingError> {
@@ -336,7 +384,6 @@ impl Coupling {
                 )));
             }
         }
-        self.engine.set_body(body, k);
         Ok(())
     }
 
@@ -348,16 +395,66 @@ impl Coupling {
     /// Advance to time `t` exactly (sub-steps with the solver's own time step; the last one
     /// lands on t). `t` must not lie before the current time.
     pub fn step_to(&mut self, t: f64) -> Result<StepReport, CouplingError> {
+        self.step_within(t, &mut StepBudget::default())
+    }
+
+    /// [`Self::step_to`] within a budget of internal steps and wall-clock seconds: when one
+    /// runs out first, the report says which (`stopped`) and the state is that of the last
+    /// whole internal step, short of `t`. A solver failure is an error as in `step_to`.
+    pub fn step_within(
+        &mut self,
+        t: f64,
+        budget: &mut StepBudget,
+    ) -> Result<StepReport, CouplingError> {
         let now = self.time();
         if !t.is_finite() || t < now {
             return Err(CouplingError(format!(
                 "step_to: target time must be finite and ≥ the current time {now}, got {t}"
             )));
         }
-        let engine = &mut self.engine;
-        self.pool
-            .install(|| engine.advance_to(t))
-            .map_err(|e| CouplingError(e.to_string()))
+        // in chunks of at most a second of wall clock, each inside the pool, so the progress
+        // callback runs on the caller's thread (an FMU's logger belongs to the master's)
+        let clock = std::time::Instant::now();
+        let mut total = StepReport {
+            dt_min: f64::INFINITY,
+            ..StepReport::default()
+        };
+        loop {
+            let spent = clock.elapsed().as_secs_f64();
+            let chunk = engine::Chunk {
+                max_steps: budget.max_steps.map(|m| m.saturating_sub(total.steps)),
+                max_seconds: Some(budget.max_seconds.map_or(1.0, |m| (m - spent).min(1.0))),
+            };
+            let engine = &mut self.engine;
+            let r = self
+                .pool
+                .install(|| engine.advance_to(t, &chunk))
+                .map_err(|e| CouplingError(e.to_string()))?;
+            total.steps += r.steps;
+            if r.steps > 0 {
+                total.dt_min = total.dt_min.min(r.dt_min);
+                total.dt_max = total.dt_max.max(r.dt_max);
+            }
+            let spent = clock.elapsed().as_secs_f64();
+            if r.stopped.is_none() {
+                break;
+            }
+            if budget.max_steps.is_some_and(|m| total.steps >= m) {
+                total.stopped = Some(StepLimit::Steps(total.steps));
+                break;
+            }
+            if budget.max_seconds.is_some_and(|m| spent >= m) {
+                total.stopped = Some(StepLimit::Seconds(spent));
+                break;
+            }
+            if let Some(f) = budget.progress.as_mut() {
+                f(self.time(), total.steps, spent);
+            }
+        }
+        if total.steps == 0 {
+            total.dt_min = 0.0;
+        }
+        Ok(total)
     }
 
     /// Force and torque on every body, in case order.
@@ -387,6 +484,13 @@ impl Coupling {
     /// ≥ 0 (the solver's gauge: 0 at the EOS reference density). A rejected value changes
     /// nothing.
     pub fn set_port_pressure(&mut self, port: usize, pressure: f64) -> Result<(), CouplingError> {
+        self.check_port_pressure(port, pressure)?;
+        self.engine.set_port_pressure(port, pressure);
+        Ok(())
+    }
+
+    /// Whether [`Self::set_port_pressure`] would take `pressure` (it changes nothing).
+    pub fn check_port_pressure(&self, port: usize, pressure: f64) -> Result<(), CouplingError> {
         let cfg = self.case.ports.get(port).ok_or_else(|| {
             CouplingError(format!(
                 "port: index {port} out of range (the case has {} ports)",
@@ -408,7 +512,6 @@ impl Coupling {
                 cfg.name
             )));
         }
-        self.engine.set_port_pressure(port, pressure);
         Ok(())
     }
 

@@ -10,7 +10,11 @@
 //! buffers are refilled by every evaluation), which `tests/coupling.rs` checks bit for bit
 //! for each scheme family.
 //!
-//! Encoding: postcard (f64 as its 8 bytes, so the round trip is exact).
+//! Encoding: postcard (f64 as its 8 bytes, so the round trip is exact), in an envelope that
+//! makes a damaged state a plain error (never a panic in a later step, never a run on silently
+//! wrong data): magic bytes, format version, payload length and a CRC-32 of the payload
+//! (crc32fast; CRC-32 catches every error burst of up to 32 bits, so every single-byte
+//! change), then, once decoded, every invariant a later step relies on (`integrity.rs`).
 
 use super::engine::Coupled;
 use crate::boundary::bodies::Body;
@@ -23,33 +27,32 @@ use crate::system::{EvalStats, VerletList};
 use serde::{Deserialize, Serialize};
 
 const MAGIC: [u8; 8] = *b"sphfmu\0s";
-const VERSION: u32 = 2;
+/// 3: the checksummed envelope.
+const VERSION: u32 = 3;
 
 #[derive(Serialize, Deserialize)]
 struct Header {
-    magic: [u8; 8],
-    version: u32,
     dimension: u32,
     fingerprint: u64,
     particles: u64,
 }
 
 #[derive(Serialize, Deserialize)]
-struct Saved<const D: usize> {
-    time: f64,
-    steps: u64,
-    last_dt: f64,
-    dirty: bool,
-    gravity: Vector<D>,
-    particles: Particles<D>,
-    bodies: Vec<Body<D>>,
-    ports: Vec<Port<D>>,
-    grid: CellGrid<D>,
-    verlet: VerletList<D>,
-    neighbours: NeighbourList,
-    stats: EvalStats,
-    integrator: Integrator<D>,
-    scheme: Vec<f64>,
+pub(super) struct Saved<const D: usize> {
+    pub(super) time: f64,
+    pub(super) steps: u64,
+    pub(super) last_dt: f64,
+    pub(super) dirty: bool,
+    pub(super) gravity: Vector<D>,
+    pub(super) particles: Particles<D>,
+    pub(super) bodies: Vec<Body<D>>,
+    pub(super) ports: Vec<Port<D>>,
+    pub(super) grid: CellGrid<D>,
+    pub(super) verlet: VerletList<D>,
+    pub(super) neighbours: NeighbourList,
+    pub(super) stats: EvalStats,
+    pub(super) integrator: Integrator<D>,
+    pub(super) scheme: Vec<f64>,
 }
 
 /// FNV-1a of the case as run (options applied), so a state only goes back into the case it
@@ -65,8 +68,6 @@ pub(super) fn save<const D: usize>(c: &Coupled<D>, fingerprint: u64) -> Vec<u8> 
     let sim = &c.sim;
     let sys = &sim.sys;
     let header = Header {
-        magic: MAGIC,
-        version: VERSION,
         dimension: D as u32,
         fingerprint,
         particles: sys.particles.len() as u64,
@@ -87,9 +88,64 @@ pub(super) fn save<const D: usize>(c: &Coupled<D>, fingerprint: u64) -> Vec<u8> 
         integrator: sim.integrator.clone(),
         scheme: sim.scheme.carried_state(),
     };
-    let mut out = postcard::to_stdvec(&header).expect("a header always encodes");
-    out.extend(postcard::to_stdvec(&saved).expect("the solver state always encodes"));
+    let mut payload = postcard::to_stdvec(&header).expect("a header always encodes");
+    payload.extend(postcard::to_stdvec(&saved).expect("the solver state always encodes"));
+    seal(&MAGIC, VERSION, &payload)
+}
+
+/// `magic | version (u32 LE) | payload length (u64 LE) | CRC-32 of the payload (u32 LE) |
+/// payload`: the envelope of a saved solver state (and of the FMU's serialized state).
+pub fn seal(magic: &[u8; 8], version: u32, payload: &[u8]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(24 + payload.len());
+    out.extend_from_slice(magic);
+    out.extend_from_slice(&version.to_le_bytes());
+    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    out.extend_from_slice(&crc32fast::hash(payload).to_le_bytes());
+    out.extend_from_slice(payload);
     out
+}
+
+/// The payload of an envelope written by [`seal`], or why it is not one: `what` names the
+/// state in the message.
+pub fn open<'a>(
+    what: &str,
+    magic: &[u8; 8],
+    version: u32,
+    bytes: &'a [u8],
+) -> Result<&'a [u8], String> {
+    if bytes.len() < 24 {
+        return Err(format!(
+            "{what}: {} bytes, shorter than the 24-byte envelope of a saved state",
+            bytes.len()
+        ));
+    }
+    if &bytes[..8] != magic {
+        return Err(format!(
+            "{what}: not a saved sphfmu state (wrong magic bytes)"
+        ));
+    }
+    let v = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
+    if v != version {
+        return Err(format!(
+            "{what}: format version {v} (this build reads {version})"
+        ));
+    }
+    let len = u64::from_le_bytes(bytes[12..20].try_into().expect("8 bytes"));
+    let payload = &bytes[24..];
+    if len != payload.len() as u64 {
+        return Err(format!(
+            "{what}: truncated or extended ({} payload bytes, the envelope says {len})",
+            payload.len()
+        ));
+    }
+    let crc = u32::from_le_bytes(bytes[20..24].try_into().expect("4 bytes"));
+    let actual = crc32fast::hash(payload);
+    if crc != actual {
+        return Err(format!(
+            "{what}: damaged (CRC-32 {actual:08x}, the envelope says {crc:08x})"
+        ));
+    }
+    Ok(payload)
 }
 
 pub(super) fn restore<const D: usize>(
@@ -97,17 +153,9 @@ pub(super) fn restore<const D: usize>(
     bytes: &[u8],
     fingerprint: u64,
 ) -> Result<(), String> {
-    let (header, rest): (Header, &[u8]) = postcard::take_from_bytes(bytes)
+    let payload = open("state", &MAGIC, VERSION, bytes)?;
+    let (header, rest): (Header, &[u8]) = postcard::take_from_bytes(payload)
         .map_err(|e| format!("state: not a saved sphfmu state ({e})"))?;
-    if header.magic != MAGIC {
-        return Err("state: not a saved sphfmu state (wrong magic bytes)".into());
-    }
-    if header.version != VERSION {
-        return Err(format!(
-            "state: format version {} (this build reads {VERSION})",
-            header.version
-        ));
-    }
     if header.dimension as usize != D || header.fingerprint != fingerprint {
         return Err(format!(
             "state: saved from another case or other options ({}D, fingerprint {:016x}; this instance: {D}D, {fingerprint:016x})",
@@ -116,12 +164,11 @@ pub(super) fn restore<const D: usize>(
     }
     let saved: Saved<D> =
         postcard::from_bytes(rest).map_err(|e| format!("state: damaged ({e})"))?;
-    if saved.particles.len() as u64 != header.particles
-        || saved.bodies.len() != c.sim.sys.bodies.len()
-        || saved.ports.len() != c.sim.sys.ports.len()
-    {
-        return Err("state: damaged (particle or body count does not match its header)".into());
+    if saved.particles.len() as u64 != header.particles {
+        return Err("state: damaged (particle count does not match its header)".into());
     }
+    // every invariant a later step relies on, before anything of the instance changes
+    super::integrity::check(&saved, c).map_err(|e| format!("state: damaged ({e})"))?;
     let sim = &mut c.sim;
     sim.scheme
         .set_carried_state(&saved.scheme)

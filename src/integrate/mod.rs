@@ -78,6 +78,26 @@ pub struct Integrator<const D: usize> {
     saved: Saved<D>,
 }
 
+impl<const D: usize> Integrator<D> {
+    /// Whether a saved integrator (from a saved state) holds only finite numbers. Its stage
+    /// arrays are refilled at the start of every step, so their lengths do not matter.
+    pub fn check(&self) -> Result<(), String> {
+        let s = &self.saved;
+        let ok = s
+            .pos
+            .iter()
+            .chain(&s.vel)
+            .all(|x| x.iter().all(|c| c.is_finite()))
+            && s.u.iter().chain(&s.rho).all(|x| x.is_finite())
+            && s.entropy.iter().flatten().all(|x| x.is_finite());
+        if ok {
+            Ok(())
+        } else {
+            Err("the integrator's saved stage is not finite".into())
+        }
+    }
+}
+
 /// U ← c0·U0 + c1·(U + dt·L(U)) on (x, v, u).
 fn combine<const D: usize>(sys: &mut System<D>, s0: &Saved<D>, c0: f64, c1: f64, dt: f64) {
     let p = &mut sys.particles;

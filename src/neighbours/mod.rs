@@ -235,6 +235,53 @@ impl<const D: usize> CellGrid<D> {
     }
 }
 
+impl<const D: usize> CellGrid<D> {
+    /// Whether this grid (from a saved state) is one a later step can use with `n`
+    /// particles: finite geometry, a cell table matching its dimensions, and `sorted` a
+    /// permutation of the particles (or the empty grid of a state whose lists were reset).
+    pub fn check(&self, n: usize) -> Result<(), String> {
+        if !(self.cell.is_finite() && self.cell > 0.0) || self.origin.iter().any(|x| !x.is_finite())
+        {
+            return Err("cell grid: non-finite or non-positive geometry".into());
+        }
+        let cells = self
+            .dims
+            .iter()
+            .try_fold(1usize, |a, &d| if d == 0 { None } else { a.checked_mul(d) })
+            .filter(|&c| c <= 2 * n + 1024)
+            .ok_or("cell grid: dimensions out of range")?;
+        if self.sorted.is_empty() && self.cell_start.len() <= cells + 1 {
+            // the default grid, or one whose particles were reset (ports)
+            return if self.cell_start.iter().all(|&c| c == 0) {
+                Ok(())
+            } else {
+                Err("cell grid: cell table without particles".into())
+            };
+        }
+        if self.sorted.len() != n || self.cell_start.len() != cells + 1 {
+            return Err(format!(
+                "cell grid: {} sorted particles and {} cell starts for {n} particles and {cells} cells",
+                self.sorted.len(),
+                self.cell_start.len()
+            ));
+        }
+        if self.cell_start[0] != 0
+            || self.cell_start.windows(2).any(|w| w[0] > w[1])
+            || self.cell_start[cells] as usize != n
+        {
+            return Err("cell grid: cell starts not increasing to the particle count".into());
+        }
+        let mut seen = vec![false; n];
+        for &i in &self.sorted {
+            match seen.get_mut(i as usize) {
+                Some(s) if !*s => *s = true,
+                _ => return Err("cell grid: sorted particles are not a permutation".into()),
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Compressed neighbour lists (CSR): neighbours of a are `entries[offsets[a]..offsets[a+1]]`.
 #[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct NeighbourList {
@@ -249,6 +296,30 @@ impl NeighbourList {
     }
     pub fn total_pairs(&self) -> usize {
         self.entries.len()
+    }
+
+    /// Whether these lists (from a saved state) fit `n` particles: empty (built anew by the
+    /// next evaluation), or offsets for every particle, increasing to the entry count, and
+    /// every entry naming a particle and an image code the domain has.
+    pub fn check(&self, n: usize) -> Result<(), String> {
+        if self.offsets.is_empty() && self.entries.is_empty() {
+            return Ok(());
+        }
+        if self.offsets.len() != n + 1
+            || self.offsets[0] != 0
+            || self.offsets.windows(2).any(|w| w[0] > w[1])
+            || self.offsets[n] != self.entries.len()
+        {
+            return Err(format!(
+                "neighbour list: {} offsets for {n} particles, not increasing to its {} entries",
+                self.offsets.len(),
+                self.entries.len()
+            ));
+        }
+        if self.entries.iter().any(|&e| unpack(e).0 >= n) {
+            return Err("neighbour list: an entry names no particle".into());
+        }
+        Ok(())
     }
 
     /// Build lists for all particles: b is a neighbour of a (through image `code`) when

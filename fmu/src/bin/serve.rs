@@ -9,7 +9,7 @@
 use clap::Parser;
 use sphfmu_fmu::bridge::error_payload;
 use sphfmu_fmu::bridge::node::{handle, set_text, Op, OPS};
-use sphfmu_fmu::model::{Instance, Status};
+use sphfmu_fmu::instance::{Instance, Status};
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::mpsc;
@@ -20,7 +20,7 @@ use zenoh::Wait;
 #[derive(Parser)]
 #[command(
     name = "sphfmu serve",
-    about = "Serve an sphfmu case over zenoh (step, get, set, save_state, restore_state, stop, snapshot)"
+    about = "Serve an sphfmu case over zenoh (step, get, set, save_state, restore_state, reset, stop, snapshot)"
 )]
 struct Args {
     /// Case file (TOML)
@@ -153,6 +153,8 @@ fn reply(q: &Query, op: Op, r: Result<Vec<u8>, String>) {
 
 fn serve(a: Args) -> Result<(), String> {
     let mut inst = setup(&a)?;
+    // what `reset` goes back to
+    let initial = inst.get_state().map_err(|e| e.1)?;
     let session = inst.live_session().expect("zenoh mode is on");
     let prefix = inst.live_prefix();
     let (tx, rx) = mpsc::channel::<(Op, Query)>();
@@ -194,7 +196,7 @@ fn serve(a: Args) -> Result<(), String> {
         };
         let Some((op, q)) = next else { break };
         let payload = q.payload().map(|p| p.to_bytes().to_vec());
-        let r = handle(&mut inst, op, payload.as_deref());
+        let r = handle(&mut inst, op, payload.as_deref(), &initial);
         reply(&q, op, r);
         if op == Op::Stop {
             break;

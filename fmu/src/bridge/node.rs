@@ -9,11 +9,17 @@
 //! - `<prefix>/set`   `{"values": {name: v}}` (all or nothing) → `{"t"}`
 //! - `<prefix>/save_state` → the FMU state bytes (as `fmi3SerializeFMUState`)
 //! - `<prefix>/restore_state` with those bytes → `{"t"}`
+//! - `<prefix>/reset` → `{"t"}`: back to the state at the end of initialisation (bit for bit),
+//!   also out of Failed (a step the solver could not take, e.g. under an absurd gravity)
 //! - `<prefix>/stop` → `{"t"}`, then the node exits.
+//!
+//! A request with a bad argument gets an error reply and changes nothing; the node goes on
+//! serving. A step cut short by `limits.max_internal_steps` / `limits.max_step_seconds`
+//! (`--set`) gets an error reply that says where it stopped, with the node at that time.
 
 use super::codec::{self, field, map, numbers};
-use crate::inputs::Snapshot;
-use crate::model::Instance;
+use crate::instance::inputs::Snapshot;
+use crate::instance::Instance;
 use crate::table::{Causality, Kind};
 use ciborium::Value;
 
@@ -24,15 +30,17 @@ pub enum Op {
     Set,
     SaveState,
     RestoreState,
+    Reset,
     Stop,
 }
 
-pub const OPS: [(&str, Op); 6] = [
+pub const OPS: [(&str, Op); 7] = [
     ("step", Op::Step),
     ("get", Op::Get),
     ("set", Op::Set),
     ("save_state", Op::SaveState),
     ("restore_state", Op::RestoreState),
+    ("reset", Op::Reset),
     ("stop", Op::Stop),
 ];
 
@@ -126,8 +134,13 @@ pub fn set_text(inst: &mut Instance, name: &str, text: &str) -> Result<(), Strin
     set(inst, i, &v)
 }
 
-/// Answer one request.
-pub fn handle(inst: &mut Instance, op: Op, payload: Option<&[u8]>) -> Result<Vec<u8>, String> {
+/// Answer one request; `initial` is the state at the end of initialisation (for `reset`).
+pub fn handle(
+    inst: &mut Instance,
+    op: Op,
+    payload: Option<&[u8]>,
+    initial: &Snapshot,
+) -> Result<Vec<u8>, String> {
     let name = OPS.iter().find(|o| o.1 == op).expect("listed").0;
     match op {
         Op::Step => {
@@ -196,7 +209,7 @@ pub fn handle(inst: &mut Instance, op: Op, payload: Option<&[u8]>) -> Result<Vec
                 for (i, v) in &resolved {
                     if let Err(e) = set(inst, *i, v) {
                         message = e.clone();
-                        return Err((crate::model::Status::Error, e));
+                        return Err((crate::instance::Status::Error, e));
                     }
                 }
                 Ok(())
@@ -209,6 +222,10 @@ pub fn handle(inst: &mut Instance, op: Op, payload: Option<&[u8]>) -> Result<Vec
             let bytes = payload.ok_or("restore_state: send the bytes of a saved state")?;
             let s = Snapshot::deserialize(bytes).map_err(|e| format!("restore_state: {e}"))?;
             inst.set_state(&s).map_err(|e| e.1)?;
+            Ok(time_reply(inst))
+        }
+        Op::Reset => {
+            inst.set_state(initial).map_err(|e| e.1)?;
             Ok(time_reply(inst))
         }
         Op::Stop => Ok(time_reply(inst)),

@@ -7,6 +7,7 @@
 //! each with its own value reference.
 
 mod rows;
+pub mod units;
 
 use sphfmu::boundary::kinematics::Motion;
 use sphfmu::boundary::ports::PortPressure;
@@ -38,7 +39,8 @@ pub enum Param {
     Threads,
     OutputDir,
     OutputInterval,
-    Zenoh(crate::zenoh_settings::ZenohParam),
+    Zenoh(crate::bridge::settings::ZenohParam),
+    Limit(crate::instance::limits::LimitParam),
 }
 
 /// What a variable reads or writes.

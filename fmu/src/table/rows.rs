@@ -2,7 +2,7 @@
 //! outputs of bodies, probes, markers, patches and ports, and the diagnostics.
 
 use super::*;
-use crate::units::units;
+use crate::table::units::units;
 use sphfmu::boundary::kinematics::Motion;
 use sphfmu::boundary::ports::PortPressure;
 
@@ -166,7 +166,15 @@ impl Table {
             "Simulation time between snapshots, ≥ 0; 0 = after every doStep",
             Param::OutputInterval,
         );
-        for (name, kind, start, description, which) in crate::zenoh_settings::parameter_rows() {
+        for (name, which, integer, unit, description) in crate::instance::limits::ROWS {
+            let (kind, start) = if integer {
+                (Kind::Int64, Start::Int(0))
+            } else {
+                (Kind::Float64, float(0.0))
+            };
+            v.param(name, kind, start, unit, description, Param::Limit(which));
+        }
+        for (name, kind, start, description, which) in crate::bridge::settings::parameter_rows() {
             let start = match kind {
                 Kind::Float64 => float(start.parse().expect("a number")),
                 _ => text(start),

@@ -1,6 +1,6 @@
 //! What both C faces share: panic containment and C strings.
 
-use crate::model::{CallResult, Instance, Status};
+use crate::instance::{CallResult, Instance, Status};
 use std::ffi::{c_char, c_int, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 

@@ -44,9 +44,14 @@ pub(crate) fn start_inputs(table: &Table) -> Inputs {
     inputs
 }
 
+/// The serialized FMU state's envelope (`sphfmu::coupling::state::seal`): magic bytes and
+/// format version; the CRC-32 covers the inputs and the solver's own (sealed) bytes alike.
+const MAGIC: [u8; 8] = *b"sphfmuFS";
+const VERSION: u32 = 1;
+
 impl Snapshot {
-    /// Bytes (f64 little endian): gravity, start time, the body count and 8 numbers per body,
-    /// the port count and one pressure per port, then the solver's state.
+    /// Sealed bytes: gravity, start time, the body count and 8 numbers per body, the port
+    /// count and one pressure per port (f64 little endian), then the solver's state.
     pub fn serialize(&self) -> Vec<u8> {
         let mut out = Vec::new();
         let mut put = |x: f64| out.extend_from_slice(&x.to_le_bytes());
@@ -61,10 +66,14 @@ impl Snapshot {
         put(self.inputs.ports.len() as f64);
         self.inputs.ports.iter().for_each(|x| put(*x));
         out.extend_from_slice(&self.solver);
-        out
+        sphfmu::coupling::state::seal(&MAGIC, VERSION, &out)
     }
 
+    /// The state back from [`Self::serialize`]'s bytes. Empty, truncated, extended, random or
+    /// altered bytes are an error naming what is wrong; the solver part is checked again, in
+    /// full, when the state is set (`Coupling::restore`).
     pub fn deserialize(bytes: &[u8]) -> Result<Snapshot, String> {
+        let bytes = sphfmu::coupling::state::open("serialized FMU state", &MAGIC, VERSION, bytes)?;
         let mut at = 0;
         let mut get = || -> Result<f64, String> {
             let b = bytes

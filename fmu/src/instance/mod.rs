@@ -1,11 +1,16 @@
 //! One FMU instance behind both FMI faces: the state machine, parameters, inputs, outputs,
 //! FMU states. `fmi2.rs` and `fmi3.rs` only translate C arguments and status codes.
 
-use crate::inputs::{start_inputs, Inputs, Snapshot};
+pub mod inputs;
+pub mod limits;
+pub(crate) mod solver;
+mod values;
+
+use crate::bridge::settings::ZenohSettings;
 use crate::table::{Start, Table};
-use crate::zenoh_settings::ZenohSettings;
+use inputs::{start_inputs, Inputs, Snapshot};
 use sphfmu::case::Case;
-use sphfmu::coupling::{Coupling, CouplingOptions};
+use sphfmu::coupling::{Coupling, CouplingOptions, StepLimit};
 use std::path::{Path, PathBuf};
 
 /// FMI status codes (the same numbers in FMI 2.0 and 3.0).
@@ -45,6 +50,7 @@ pub(crate) struct Params {
     pub(crate) output_dir: String,
     pub(crate) output_interval: f64,
     pub(crate) zenoh: ZenohSettings,
+    pub(crate) limits: limits::Limits,
 }
 
 impl Params {
@@ -58,6 +64,7 @@ impl Params {
             output_dir: String::new(),
             output_interval: 0.0,
             zenoh: ZenohSettings::default(),
+            limits: Default::default(),
         }
     }
 }
@@ -77,7 +84,7 @@ pub struct Instance {
     pub table: Table,
     pub(crate) params: Params,
     pub(crate) inputs: Inputs,
-    pub(crate) coupling: crate::solver::Solver,
+    pub(crate) coupling: crate::instance::solver::Solver,
     /// The zenoh bridge while live coupling is on (`zenoh.mode`).
     #[cfg(feature = "zenoh")]
     pub(crate) bridge: Option<crate::bridge::Bridge>,
@@ -145,19 +152,26 @@ impl Instance {
         })
     }
 
-    /// Log through the master: errors always, the rest when logging is on for the category.
+    /// Log through the master: errors and discards always, the rest when logging is on for
+    /// the category.
     pub fn log(&self, status: Status, category: &str, msg: &str) {
-        let wanted = status >= Status::Error
-            || (self.logging_on
-                && (self.categories.is_empty() || self.categories.iter().any(|c| c == category)));
-        if wanted {
+        if status >= Status::Discard || self.logs(category) {
             (self.logger)(status, category, msg);
         }
     }
 
+    /// Whether messages of `category` go to the master now.
+    fn logs(&self, category: &str) -> bool {
+        self.logging_on
+            && (self.categories.is_empty() || self.categories.iter().any(|c| c == category))
+    }
+
     pub fn set_debug_logging(&mut self, on: bool, categories: Vec<String>) -> CallResult<()> {
         for c in &categories {
-            if !crate::xml::LOG_CATEGORIES.iter().any(|(n, _)| n == c) {
+            if !crate::packaging::xml::LOG_CATEGORIES
+                .iter()
+                .any(|(n, _)| n == c)
+            {
                 return err(format!(
                     "setDebugLogging: unknown category {c:?} (known: logEvents, logStatusWarning, logStatusError, logSolver)"
                 ));
@@ -190,6 +204,16 @@ impl Instance {
             "logEvents",
             &format!("initialisation at t = {start_time}"),
         );
+        // f64 resolves a time t to about 2.2e-16 |t|: past 1e7 s a step of 1e-9 s is lost
+        let resolution = f64::EPSILON * start_time.abs();
+        if resolution > 1e-9 {
+            return Err((
+                Status::Warning,
+                format!(
+                    "enterInitializationMode: startTime {start_time} resolves times only to {resolution:.1e} s; doStep refuses steps shorter than that"
+                ),
+            ));
+        }
         Ok(())
     }
 
@@ -242,6 +266,7 @@ impl Instance {
             resolution: p.resolution,
             cfl: (p.cfl != 0.0).then_some(p.cfl),
             threads: p.threads as usize,
+            limits: p.limits.size(),
         };
         let c = Coupling::new(&case, &options).map_err(|e| (Status::Error, e.0))?;
         self.coupling.put(Some(c));
@@ -268,6 +293,10 @@ impl Instance {
         self.start_time + self.coupling.get().map(|c| c.time()).unwrap_or(0.0)
     }
 
+    /// One communication step. Its arguments are checked first: a bad one is an Error that
+    /// changes nothing (the instance stays in step mode). Only a failure of the solver itself
+    /// moves the instance to Failed, from which `setFMUState` or `reset` recover it. A step
+    /// that runs out of its `limits.*` budget returns Discard at the time it reached.
     pub fn do_step(&mut self, current: f64, h: f64) -> CallResult<()> {
         self.expect_mode("doStep", &[Mode::Step])?;
         let now = self.time();
@@ -281,14 +310,64 @@ impl Instance {
                 "currentCommunicationPoint {current} is not the FMU's time {now}"
             ));
         }
-        self.apply_inputs_live()?;
         let target = current + h - self.start_time;
+        let solver_time = self.coupling.get().map_or(0.0, |c| c.time());
+        if !(target > solver_time) {
+            return err(format!(
+                "communicationStepSize {h}: the step from {current} ends at {}, not after the FMU's time {now} (the step is below the resolution of the time, or the communication point lies behind it within the 1e-9 tolerance)",
+                current + h
+            ));
+        }
+        self.apply_inputs_live()?;
+        let limits = self.params.limits;
+        let (logger, logging) = (&self.logger, self.logs("logSolver"));
+        let start_time = self.start_time;
+        let mut progress = |t: f64, steps: u64, seconds: f64| {
+            if logging {
+                logger(
+                    Status::Ok,
+                    "logSolver",
+                    &format!(
+                        "doStep to t = {}: at t = {} after {steps} internal steps, {seconds:.1} s",
+                        current + h,
+                        start_time + t
+                    ),
+                );
+            }
+        };
+        let mut budget = limits.budget(&mut progress);
         let c = self
             .coupling
             .get_mut()
             .expect("coupling built in step mode");
-        match c.step_to(target) {
+        let result = c.step_within(target, &mut budget);
+        drop(budget);
+        match result {
             Ok(r) => {
+                let reached = self.time();
+                if let Some(why) = r.stopped {
+                    let limit = match why {
+                        StepLimit::Steps(n) => format!(
+                            "limits.max_internal_steps = {} ({n} internal steps taken)",
+                            limits.max_internal_steps
+                        ),
+                        StepLimit::Seconds(s) => format!(
+                            "limits.max_step_seconds = {} ({s:.3} s of wall clock)",
+                            limits.max_step_seconds
+                        ),
+                    };
+                    // (a snapshot that cannot be written is the lesser news here)
+                    let _ = self.write_output();
+                    self.publish_live();
+                    return Err((
+                        Status::Discard,
+                        format!(
+                            "the step to t = {} stopped at t = {reached} after {} internal steps: {limit}; lastSuccessfulTime = {reached}. Go on from there, or restore an earlier FMU state",
+                            current + h,
+                            r.steps
+                        ),
+                    ));
+                }
                 let msg = format!(
                     "doStep to t = {}: {} internal steps, dt in [{:.3e}, {:.3e}]",
                     current + h,
@@ -390,6 +469,27 @@ impl Instance {
             );
         }
         let c = self.coupling.get_mut().expect("built above");
+        // the inputs the state carries pass the checks a master's set would
+        let bad = |e: sphfmu::coupling::CouplingError| {
+            (
+                Status::Error,
+                format!("setFMUState: the state's inputs: {}", e.0),
+            )
+        };
+        if !s.start_time.is_finite() {
+            return err(format!(
+                "setFMUState: the state's start time {} is not finite",
+                s.start_time
+            ));
+        }
+        c.check_gravity(&s.inputs.gravity).map_err(bad)?;
+        for (k, &b) in self.table.external_bodies.iter().enumerate() {
+            c.check_body_kinematics(b, &s.inputs.bodies[k])
+                .map_err(bad)?;
+        }
+        for (k, &p) in self.table.external_ports.iter().enumerate() {
+            c.check_port_pressure(p, s.inputs.ports[k]).map_err(bad)?;
+        }
         c.restore(&s.solver)
             .map_err(|e| (Status::Error, format!("setFMUState: {}", e.0)))?;
         self.inputs = s.inputs.clone();

@@ -2,7 +2,7 @@
 //! initialisation, overlay live inputs on the master's at each communication point, publish
 //! the outputs after it. Without the `zenoh` feature only "off" is accepted.
 
-use crate::model::{CallResult, Instance, Status};
+use crate::instance::{CallResult, Instance, Status};
 #[cfg(feature = "zenoh")]
 use crate::table::{Causality, Kind};
 

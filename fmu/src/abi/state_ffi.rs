@@ -1,9 +1,9 @@
 //! The FMU-state calls as both C faces need them (FMI 2.0 `fmi2GetFMUstate` … and FMI 3.0
 //! `fmi3GetFMUState` … differ only in names): the state handle is a boxed `Snapshot`.
 
-use crate::ffi::{slice, slice_mut};
-use crate::inputs::Snapshot;
-use crate::model::{CallResult, Instance, Status};
+use crate::abi::ffi::{slice, slice_mut};
+use crate::instance::inputs::Snapshot;
+use crate::instance::{CallResult, Instance, Status};
 use std::ffi::c_void;
 
 fn bad<T>(msg: impl Into<String>) -> CallResult<T> {
@@ -99,26 +99,28 @@ macro_rules! export_state_functions {
         #[no_mangle]
         pub unsafe extern "C" fn $get(p: $handle, state: *mut *mut c_void) -> $ret {
             with(p, stringify!($get), |f| {
-                $crate::state_ffi::get(&f.inst, state)
+                $crate::abi::state_ffi::get(&f.inst, state)
             })
         }
 
         #[no_mangle]
         pub unsafe extern "C" fn $set(p: $handle, state: *mut c_void) -> $ret {
             with(p, stringify!($set), |f| {
-                $crate::state_ffi::set(&mut f.inst, state)
+                $crate::abi::state_ffi::set(&mut f.inst, state)
             })
         }
 
         #[no_mangle]
         pub unsafe extern "C" fn $free(p: $handle, state: *mut *mut c_void) -> $ret {
-            with(p, stringify!($free), |_| $crate::state_ffi::free(state))
+            with(p, stringify!($free), |_| {
+                $crate::abi::state_ffi::free(state)
+            })
         }
 
         #[no_mangle]
         pub unsafe extern "C" fn $size(p: $handle, state: *mut c_void, size: *mut usize) -> $ret {
             with(p, stringify!($size), |_| {
-                $crate::state_ffi::size(state, size)
+                $crate::abi::state_ffi::size(state, size)
             })
         }
 
@@ -130,7 +132,7 @@ macro_rules! export_state_functions {
             size: usize,
         ) -> $ret {
             with(p, stringify!($ser), |_| {
-                $crate::state_ffi::serialize(state, bytes, size)
+                $crate::abi::state_ffi::serialize(state, bytes, size)
             })
         }
 
@@ -142,7 +144,7 @@ macro_rules! export_state_functions {
             state: *mut *mut c_void,
         ) -> $ret {
             with(p, stringify!($de), |_| {
-                $crate::state_ffi::deserialize(bytes, size, state)
+                $crate::abi::state_ffi::deserialize(bytes, size, state)
             })
         }
     };

@@ -2,9 +2,9 @@
 //! three scalars (`name[1]`..`name[3]`); Int64 variables as Integer (saturated to i32).
 #![allow(non_snake_case, clippy::missing_safety_doc, clippy::too_many_arguments)]
 
-use crate::ffi::{bad, slice, slice_mut, text, uri_to_path, with, Fmu};
-use crate::model::{CallResult, Instance, Status};
-use crate::state_ffi;
+use crate::abi::ffi::{bad, slice, slice_mut, text, uri_to_path, with, Fmu};
+use crate::abi::state_ffi;
+use crate::instance::{CallResult, Instance, Status};
 use crate::table::Kind;
 use std::ffi::{c_char, c_int, c_void, CString};
 use std::path::Path;
@@ -81,7 +81,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
         let dir = uri_to_path(uri)
             .ok_or_else(|| format!("fmuResourceLocation {uri:?}: not a file URI"))?;
         let name_owned = CString::new(name).unwrap_or_default();
-        let log: crate::model::Logger = Box::new(move |status, cat, msg| {
+        let log: crate::instance::Logger = Box::new(move |status, cat, msg| {
             if let Some(cb) = logger {
                 let c = CString::new(cat).unwrap_or_default();
                 let m = c_message(msg);
@@ -95,7 +95,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
             }
         });
         let mut inst = Instance::new(name, Path::new(&dir), log)?;
-        let want = crate::xml::token(&inst.table);
+        let want = crate::packaging::xml::token(&inst.table);
         let got = text(guid).unwrap_or("");
         if got != want {
             return Err(format!(
@@ -126,7 +126,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2FreeInstance(p: Comp) {
-    crate::ffi::free_instance(p);
+    crate::abi::ffi::free_instance(p);
 }
 
 #[no_mangle]
@@ -137,7 +137,7 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
     categories: *const *const c_char,
 ) -> c_int {
     with(p, "fmi2SetDebugLogging", |f| {
-        let names = crate::ffi::strings(categories, n, "categories")?;
+        let names = crate::abi::ffi::strings(categories, n, "categories")?;
         f.inst.set_debug_logging(logging_on != 0, names)
     })
 }
@@ -152,7 +152,7 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
     _stop_time: f64,
 ) -> c_int {
     with(p, "fmi2SetupExperiment", |f| {
-        if f.inst.mode != crate::model::Mode::Instantiated {
+        if f.inst.mode != crate::instance::Mode::Instantiated {
             return bad(format!("not allowed in state {:?}", f.inst.mode));
         }
         if !start_time.is_finite() {

@@ -1,7 +1,7 @@
 //! modelDescription.xml for FMI 3.0 and FMI 2.0, written from the variable table.
 
+use crate::table::units::{quantity, UNITS};
 use crate::table::{Causality, Kind, Start, Table, Variable};
-use crate::units::{quantity, UNITS};
 use std::fmt::Write;
 
 pub const MODEL_IDENTIFIER: &str = "sphfmu";

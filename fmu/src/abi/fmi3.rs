@@ -4,9 +4,9 @@
 //! master) and checks its pointers.
 #![allow(non_snake_case, clippy::missing_safety_doc, clippy::too_many_arguments)]
 
-use crate::ffi::{bad, slice, slice_mut, text, with, Fmu};
-use crate::model::{CallResult, Instance, Status};
-use crate::state_ffi;
+use crate::abi::ffi::{bad, slice, slice_mut, text, with, Fmu};
+use crate::abi::state_ffi;
+use crate::instance::{CallResult, Instance, Status};
 use crate::table::Kind;
 use std::ffi::{c_char, c_void, CString};
 use std::path::Path;
@@ -88,7 +88,7 @@ pub unsafe extern "C" fn fmi3SetDebugLogging(
     categories: *const *const c_char,
 ) -> i32 {
     with(p, "fmi3SetDebugLogging", |f| {
-        let names = crate::ffi::strings(categories, n, "categories")?;
+        let names = crate::abi::ffi::strings(categories, n, "categories")?;
         f.inst.set_debug_logging(logging_on, names)
     })
 }
@@ -122,7 +122,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
         if event_mode_used {
             return Err("eventModeUsed: sphfmu has no event mode (it has no events)".into());
         }
-        let logger: crate::model::Logger = Box::new(move |status, cat, msg| {
+        let logger: crate::instance::Logger = Box::new(move |status, cat, msg| {
             if let Some(cb) = log_message {
                 let c = CString::new(cat).unwrap_or_default();
                 let m = CString::new(msg.replace('\0', " ")).unwrap_or_default();
@@ -130,7 +130,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
             }
         });
         let mut inst = Instance::new(name, Path::new(res), logger)?;
-        let want = crate::xml::token(&inst.table);
+        let want = crate::packaging::xml::token(&inst.table);
         let got = text(token).unwrap_or("");
         if got != want {
             return Err(format!(
@@ -212,7 +212,7 @@ pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi3FreeInstance(p: Inst) {
-    crate::ffi::free_instance(p);
+    crate::abi::ffi::free_instance(p);
 }
 
 #[no_mangle]

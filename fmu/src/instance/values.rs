@@ -1,9 +1,9 @@
 //! Getting and setting variables of an instance: parameters, inputs (checked first, then
 //! stored, so a rejected call changes nothing) and outputs read from the solver.
 
-use crate::model::{err, CallResult, Instance, Mode, Status};
+use crate::bridge::settings::ZenohParam;
+use crate::instance::{err, CallResult, Instance, Mode, Status};
 use crate::table::{Binding, Causality, Kind, Param};
-use crate::zenoh_settings::ZenohParam;
 
 impl Instance {
     /// Run a multi-variable set so that a rejected value leaves every value as it was.
@@ -71,6 +71,11 @@ impl Instance {
                 .zenoh
                 .set_staleness(values[0])
                 .map_err(|e| (Status::Error, e))?,
+            Binding::Param(Param::Limit(which)) => {
+                self.params.limits.set_f64(which, values[0])?;
+                // the size limits act when the solver is built
+                self.coupling.put(None);
+            }
             Binding::Param(Param::Cfl) => {
                 let c = values[0];
                 if !(0.0..=1.0).contains(&c) {
@@ -125,6 +130,11 @@ impl Instance {
                 self.coupling.put(None);
                 Ok(())
             }
+            Binding::Param(Param::Limit(which)) => {
+                self.params.limits.set_i64(which, value)?;
+                self.coupling.put(None);
+                Ok(())
+            }
             _ => err(format!("{}: cannot be set", self.table.variables[i].name)),
         }
     }
@@ -166,6 +176,7 @@ impl Instance {
             Binding::Param(Param::Resolution) => vec![self.params.resolution],
             Binding::Param(Param::Cfl) => vec![self.params.cfl],
             Binding::Param(Param::OutputInterval) => vec![self.params.output_interval],
+            Binding::Param(Param::Limit(which)) => vec![self.params.limits.get(which)],
             Binding::Param(Param::Zenoh(ZenohParam::Staleness)) => {
                 vec![self.params.zenoh.staleness]
             }
@@ -226,6 +237,7 @@ impl Instance {
         let v = &self.table.variables[i];
         match v.binding {
             Binding::Param(Param::Threads) => Ok(self.params.threads),
+            Binding::Param(Param::Limit(which)) => Ok(self.params.limits.get(which) as i64),
             Binding::Steps | Binding::Particles | Binding::FluidParticles => {
                 Ok(self.output(i)?[0] as i64)
             }
