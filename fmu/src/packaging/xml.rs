@@ -147,8 +147,9 @@ fn root(table: &Table, exp: &Experiment, version: &str, token_attr: &str, extra:
 
 /// `<UnitDefinitions>`, `<LogCategories>` and `<DefaultExperiment>`, the same in both
 /// versions (and in the same place of the element order).
-fn shared_sections(out: &mut String, exp: &Experiment) {
+fn shared_sections(out: &mut String, exp: &Experiment, types: &str) {
     units_xml(out);
+    out.push_str(types);
     log_categories(out);
     writeln!(
         out,
@@ -157,6 +158,40 @@ fn shared_sections(out: &mut String, exp: &Experiment) {
         num(exp.step_size)
     )
     .unwrap();
+}
+
+/// FMI 3.0 `<TypeDefinitions>`: one Float64Type per quantity the variables have, with its
+/// unit, which the variables name as their `declaredType`. The quantity could sit on the
+/// variable itself (the standard allows it), but rust-fmi's reader (fmi-schema 0.8) refuses a
+/// `quantity` attribute on a Float64 variable, and a type definition says the same to every
+/// tool. (FMI 2.0 keeps `quantity` on the `<Real>` element, which every reader takes.)
+fn float64_types(table: &Table) -> String {
+    let mut seen: Vec<(String, &str)> = vec![];
+    for v in table.variables.iter().filter(|v| v.kind == Kind::Float64) {
+        if let Some(q) = quantity(&v.binding, table.dimension) {
+            if !seen.iter().any(|(n, _)| *n == q) {
+                seen.push((q, v.unit.unwrap_or("")));
+            }
+        }
+    }
+    if seen.is_empty() {
+        return String::new();
+    }
+    let mut out = String::from("  <TypeDefinitions>\n");
+    for (q, unit) in seen {
+        let unit = if unit.is_empty() {
+            String::new()
+        } else {
+            format!(" unit=\"{}\"", escape(unit))
+        };
+        writeln!(
+            out,
+            "    <Float64Type name=\"{q}\" quantity=\"{q}\"{unit}/>"
+        )
+        .unwrap();
+    }
+    out.push_str("  </TypeDefinitions>\n");
+    out
 }
 
 fn causality(c: Causality) -> &'static str {
@@ -183,7 +218,7 @@ pub fn fmi3(table: &Table, exp: &Experiment) -> String {
         "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" canHandleVariableCommunicationStepSize=\"true\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" canReturnEarlyAfterIntermediateUpdate=\"false\" hasEventMode=\"false\" providesIntermediateUpdate=\"false\"/>"
     )
     .unwrap();
-    shared_sections(&mut o, exp);
+    shared_sections(&mut o, exp, &float64_types(table));
     o.push_str("  <ModelVariables>\n");
     for v in &table.variables {
         let tag = match v.kind {
@@ -202,8 +237,9 @@ pub fn fmi3(table: &Table, exp: &Experiment) -> String {
         if v.causality == Causality::Output {
             attrs.push_str(" initial=\"calculated\"");
         }
-        if let Some(q) = quantity(&v.binding, table.dimension) {
-            write!(attrs, " quantity=\"{q}\"").unwrap();
+        // FMI 3.0: the quantity through a declared type (`float64_types`)
+        if let (Kind::Float64, Some(q)) = (v.kind, quantity(&v.binding, table.dimension)) {
+            write!(attrs, " declaredType=\"{q}\"").unwrap();
         }
         if let Some(u) = v.unit {
             write!(attrs, " unit=\"{}\"", escape(u)).unwrap();
@@ -259,7 +295,7 @@ pub fn fmi2(table: &Table, exp: &Experiment) -> String {
         "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" canHandleVariableCommunicationStepSize=\"true\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" canNotUseMemoryManagementFunctions=\"true\"/>"
     )
     .unwrap();
-    shared_sections(&mut o, exp);
+    shared_sections(&mut o, exp, "");
     o.push_str("  <ModelVariables>\n");
     let mut outputs = vec![];
     for (r, s) in table.fmi2.iter().enumerate() {
