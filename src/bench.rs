@@ -139,3 +139,55 @@ pub fn format_table(rows: &[BenchRow]) -> String {
     }
     s
 }
+
+/// The cost of saving and restoring a whole solver state (an FMU state), and the share of it
+/// the integrity checks take: the CRC-32 over the bytes and the invariant checks of a restore.
+#[derive(Debug, Clone, Serialize)]
+pub struct StateCost {
+    pub dimension: usize,
+    pub particles: usize,
+    pub bytes: usize,
+    /// Median seconds over the repeats.
+    pub save: f64,
+    pub restore: f64,
+    pub crc32: f64,
+    pub repeats: usize,
+}
+
+/// Save and restore an N-particle periodic box (after one step, so every list is built)
+/// `repeats` times; medians.
+pub fn state_cost(d: usize, n: usize, repeats: usize) -> Result<StateCost, String> {
+    let case = Case::parse(&box_case(d, n, "cubic-spline")).map_err(|e| e.0)?;
+    let mut c = crate::coupling::Coupling::new(&case, &Default::default()).map_err(|e| e.0)?;
+    c.step_to(1e-4).map_err(|e| e.0)?;
+    let particles = c.diagnostics().particles;
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let time = |f: &mut dyn FnMut()| {
+        let t = Instant::now();
+        f();
+        t.elapsed().as_secs_f64()
+    };
+    let (mut save, mut restore, mut crc) = (vec![], vec![], vec![]);
+    let mut bytes = c.save();
+    for _ in 0..repeats.max(1) {
+        save.push(time(&mut || bytes = c.save()));
+        let mut ok = Ok(());
+        restore.push(time(&mut || ok = c.restore(&bytes)));
+        ok.map_err(|e| e.0)?;
+        let mut h = 0;
+        crc.push(time(&mut || h = crc32fast::hash(&bytes)));
+        std::hint::black_box(h);
+    }
+    Ok(StateCost {
+        dimension: d,
+        particles,
+        bytes: bytes.len(),
+        save: median(save),
+        restore: median(restore),
+        crc32: median(crc),
+        repeats: repeats.max(1),
+    })
+}

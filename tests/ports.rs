@@ -55,7 +55,8 @@ fn poiseuille_between_two_pressure_ports_matches_the_exact_flow_rate() {
         "Poiseuille between ports: Q = {mean:.5}, exact {Q_EXACT:.5} ({:+.2} %)",
         100.0 * err
     );
-    assert!(err.abs() < 0.03, "flow rate {mean} vs exact {Q_EXACT}");
+    // measured +0.61 % (0.05031 against 0.05000): 3× that
+    assert!(err.abs() < 0.018, "flow rate {mean} vs exact {Q_EXACT}");
     // steady: each 1 s average within 3 % of the exact value too
     for w in samples.chunks(10) {
         let m = w.iter().sum::<f64>() / w.len() as f64;

@@ -37,8 +37,8 @@ fn hydrostatic_square_f1_keeps_it_f3_deforms() {
     let f1 = square_displacement("square-f1.toml");
     let f3 = square_displacement("square-f3.toml");
     println!("hydrostatic square, t = 5: mean displacement F1 {f1:.2e}, F3 {f3:.2e} spacings");
-    // measured: F1 6.1e-11 (round-off), F3 4.6 spacings (the square rounds off)
-    assert!(f1 < 1e-6, "F1 moved the square: {f1:e} spacings");
+    // measured: F1 6.4e-11 (round-off), F3 4.9 spacings (the square rounds off)
+    assert!(f1 < 2e-10, "F1 moved the square: {f1:e} spacings");
     assert!(f3 > 0.5, "F3 should deform the square: {f3:e} spacings");
 }
 

@@ -102,7 +102,7 @@ fn poiseuille(spacing: f64, t: f64) -> (f64, f64) {
 fn poiseuille_start_up_follows_the_exact_series() {
     let (err, shear) = poiseuille(0.04, 2.0);
     println!("Poiseuille start-up, Δx = 0.04, t = 2: profile error {err:.4} of the centre-line speed, wall shear {shear:+.4}");
-    // measured: profile within 0.48 % of the centre-line speed, wall shear −0.13 %
-    assert!(err < 0.02, "profile error {err}");
-    assert!(shear.abs() < 0.02, "wall shear off by {shear}");
+    // measured: profile within 0.48 % of the centre-line speed, wall shear +0.13 %: 3× each
+    assert!(err < 0.015, "profile error {err}");
+    assert!(shear.abs() < 0.004, "wall shear off by {shear}");
 }

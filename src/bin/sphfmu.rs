@@ -116,6 +116,10 @@ enum Command {
         /// Write the table as JSON too
         #[arg(long)]
         json: Option<PathBuf>,
+        /// Instead: time saving and restoring a whole solver state (an FMU state) of each
+        /// size, and the CRC-32 and checks that guard it
+        #[arg(long)]
+        state: bool,
     },
     /// Serve a case over zenoh (step, get, set, save_state, restore_state, reset, snapshot):
     /// runs `sphfmu-serve` from the same folder in this process's place (built with the FMU crate, which has zenoh; the
@@ -395,9 +399,29 @@ fn main() -> ExitCode {
             kernel,
             threads,
             json,
+            state,
         } => {
             if let Err(e) = set_threads(threads) {
                 return fail(2, e);
+            }
+            if state {
+                println!("| dim | particles | state bytes | save | restore (CRC and checks included) | CRC-32 alone |");
+                println!("|---|---|---|---|---|---|");
+                for &d in &dims {
+                    for &n in &sizes {
+                        match sphfmu::bench::state_cost(d, n, 9) {
+                            Ok(r) => {
+                                println!(
+                                "| {}D | {} | {} | {:.2} ms | {:.2} ms | {:.2} ms ({:.1} GB/s) |",
+                                r.dimension, r.particles, r.bytes, 1e3 * r.save, 1e3 * r.restore,
+                                1e3 * r.crc32, r.bytes as f64 / r.crc32 / 1e9
+                            )
+                            }
+                            Err(e) => return fail(2, e),
+                        }
+                    }
+                }
+                return ExitCode::SUCCESS;
             }
             match sphfmu::bench::run_table(&sizes, &dims, steps, &kernel) {
                 Ok(rows) => {

@@ -115,7 +115,7 @@ pub fn open<'a>(
 ) -> Result<&'a [u8], String> {
     if bytes.len() < 24 {
         return Err(format!(
-            "{what}: {} bytes, shorter than the 24-byte envelope of a saved state",
+            "{what}: not a saved sphfmu state ({} bytes, shorter than the 24-byte envelope)",
             bytes.len()
         ));
     }
@@ -134,7 +134,7 @@ pub fn open<'a>(
     let payload = &bytes[24..];
     if len != payload.len() as u64 {
         return Err(format!(
-            "{what}: truncated or extended ({} payload bytes, the envelope says {len})",
+            "{what}: damaged (truncated or extended: {} payload bytes, the envelope says {len})",
             payload.len()
         ));
     }

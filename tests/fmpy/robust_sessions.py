@@ -7,7 +7,6 @@ too small to take, and the zenoh node under the same abuse.
 import json
 import os
 import random
-import resource
 import signal
 import socket
 import subprocess
@@ -73,6 +72,7 @@ def session_state_mutants(fmu_path, fmi, count=200, seed=18):
         m[i] = (m[i] + rng.randrange(1, 256)) % 256
         attempt(bytes(m))
     mutant_logs = len(LOG) - log_before
+    mutants = json.loads(json.dumps(outcomes))
     kinds = {}
     for name, data in [("empty", b""), ("truncated", blob[: len(blob) // 2]),
                        ("one_short", blob[:-1]), ("one_long", blob + b"\0"),
@@ -90,7 +90,7 @@ def session_state_mutants(fmu_path, fmi, count=200, seed=18):
     again = force(fmu, vr, fmi).hex()
     fmu.terminate()
     fmu.freeInstance()
-    return {"outcomes": outcomes, "mutant_logs": mutant_logs, "kinds": kinds,
+    return {"outcomes": mutants, "mutant_logs": mutant_logs, "kinds": kinds,
             "bit_for_bit": again == reference, "bytes": len(blob),
             "sample_log": [m for (_, _, m) in LOG[log_before:log_before + 3]]}
 
@@ -119,8 +119,11 @@ def session_huge_cases(fmu_path, folder):
         ms = (time.perf_counter() - t0) * 1e3
         out[name] = {"status": status, "ms": ms, "log": [m for (_, _, m) in LOG[n_log:]]}
         fmu.freeInstance()
-    # ru_maxrss is in KiB on Linux: the whole Python process, numpy and fmpy included
-    out["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    # VmHWM, the peak resident memory of this process's address space (ru_maxrss would carry
+    # the pytest parent's over fork and exec): the whole Python process, numpy and fmpy included
+    with open("/proc/self/status") as f:
+        hwm = next(line for line in f if line.startswith("VmHWM:"))
+    out["peak_rss_mb"] = int(hwm.split()[1]) / 1024
     return out
 
 

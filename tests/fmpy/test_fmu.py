@@ -6,6 +6,8 @@ import subprocess
 import sys
 
 import pytest
+
+from conftest import run_session
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
@@ -26,11 +28,7 @@ def packaged():
 
 
 def session(name, **args):
-    """Run one FMU session in a fresh interpreter; its JSON result."""
-    p = subprocess.run([sys.executable, str(HERE / "fmu_sessions.py"), name, json.dumps(args)],
-                       capture_output=True, text=True, cwd=HERE, timeout=600)
-    assert p.returncode == 0, f"session {name} died (exit {p.returncode}):\n{p.stdout[-2000:]}\n{p.stderr[-3000:]}"
-    return json.loads(p.stdout.strip().splitlines()[-1])
+    return run_session("fmu_sessions.py", name, **args)
 
 
 @pytest.mark.parametrize("fmu", [FMU3, FMU2, TANK3, TANK2, CHANNEL3, CHANNEL2],
@@ -138,9 +136,10 @@ def test_varying_steps_reach_the_state_of_fixed_steps():
     r = session("step_sizes", fmu_path=str(FMU3))
     fixed, varying = r["fixed"], r["varying"]
     assert abs(fixed[-1] - 1.0) < 1e-12 and abs(varying[-1] - 1.0) < 1e-12
-    # force x, probe pressure, marker pressure, energy: measured relative differences 1.2e-6,
-    # 8.8e-6, 5e-8, 4.5e-8 (the internal steps differ where communication points cut them)
-    for k, tol in [(0, 1e-4), (3, 1e-4), (4, 1e-4), (5, 1e-6)]:
+    # force x, probe pressure, marker pressure, energy: measured relative differences 1.25e-6,
+    # 1.28e-6, 8.8e-6, 4.5e-8 (the internal steps differ where communication points cut
+    # them); tolerances 3× those
+    for k, tol in [(0, 4e-6), (3, 4e-6), (4, 3e-5), (5, 1.5e-7)]:
         assert abs(varying[k] / fixed[k] - 1) < tol, (k, fixed[k], varying[k])
 
 

@@ -312,7 +312,7 @@ impl Instance {
         }
         let target = current + h - self.start_time;
         let solver_time = self.coupling.get().map_or(0.0, |c| c.time());
-        if !(target > solver_time) {
+        if target.is_nan() || target <= solver_time {
             return err(format!(
                 "communicationStepSize {h}: the step from {current} ends at {}, not after the FMU's time {now} (the step is below the resolution of the time, or the communication point lies behind it within the 1e-9 tolerance)",
                 current + h
@@ -341,7 +341,6 @@ impl Instance {
             .get_mut()
             .expect("coupling built in step mode");
         let result = c.step_within(target, &mut budget);
-        drop(budget);
         match result {
             Ok(r) => {
                 let reached = self.time();
