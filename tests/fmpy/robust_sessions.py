@@ -179,6 +179,25 @@ def session_tiny_step(fmu_path, fmi):
     return {"status": status, "log": log, "after": after}
 
 
+def session_huge_start_time(fmu_path):
+    """startTime 1e20: a warning at enterInitializationMode, then a doStep of 0.01 s, which
+    1e20 + 0.01 == 1e20 would lose, is an Error that fails nothing."""
+    fmu, vr = open_fmu(fmu_path, init=False)
+    n_log = len(LOG)
+    fmu.enterInitializationMode(startTime=1e20)  # fmpy raises on Error, not on Warning
+    fmu.setInt64([vr["threads"]], [2])
+    fmu.exitInitializationMode()
+    warn = [(st, m) for (st, _, m) in LOG[n_log:]]
+    status = expect_error(lambda: fmu.doStep(1e20, 0.01))
+    log = [m for (_, _, m) in LOG[n_log:]]
+    t = fmu.getFloat64([vr["time"]])[0]
+    state = fmu.getFMUState()  # still in step mode
+    fmu.freeFMUState(state)
+    fmu.terminate()
+    fmu.freeInstance()
+    return {"warn": warn, "status": status, "log": log, "t": t}
+
+
 # ---- the zenoh node ---------------------------------------------------------------------------
 
 def start_node(port, prefix, *extra):

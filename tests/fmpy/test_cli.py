@@ -74,6 +74,24 @@ def test_diagnostics_series_conserves_mass_and_energy(sod_run):
     assert np.all(np.diff(d["time"]) >= 0)
 
 
+@pytest.mark.parametrize("model, edit, needle", [
+    ("tank2d.toml", ("max = [1.0, 0.5]\nspacing", "max = [1e300, 0.5]\nspacing"), "particles"),
+    ("noh2d.toml", ("max = [1.0, 1.0]", "max = [2147483648.0, 1.0]"), "particles"),
+    ("sod.toml", ("density = 1.0\n", "density = 2147483648.0\n"), "particles"),
+    ("tank2d.toml", ("spacing = 0.02", "spacing = 0.00007"), "GB"),
+], ids=["extent-1e300", "domain-2^31", "density-2^31", "1e8-particles"])
+def test_check_refuses_cases_too_large_to_build(sphfmu_bin, models, tmp_path, model, edit, needle):
+    # the size checks of a build, without building: exit 2 and one line, check and --build alike
+    text = (models / model).read_text()
+    assert edit[0] in text
+    case = tmp_path / "big.toml"
+    case.write_text(text.replace(edit[0], edit[1], 1))
+    for extra in ([], ["--build"]):
+        r = run([sphfmu_bin, "check", *extra, str(case)], timeout=30)
+        lines = r.stderr.strip().splitlines()
+        assert r.returncode == 2 and len(lines) == 1 and needle in lines[0], (extra, r.stderr)
+
+
 def test_bad_case_exits_2_with_one_line(sphfmu_bin, models, tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text((models / "sod.toml").read_text().replace("eta = 1.2", "eta = -3"))

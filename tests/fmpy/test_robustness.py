@@ -81,6 +81,14 @@ def test_a_step_ending_before_the_fmus_time_is_an_error_that_fails_nothing(fmu, 
     assert r["after"] == r["after"]
 
 
+def test_a_start_time_of_1e20_warns_and_a_step_it_cannot_resolve_is_refused():
+    r = session("huge_start_time", fmu_path=str(FMU3))
+    print(r)
+    assert any(st == 1 and "resolves times only to" in m for st, m in r["warn"]), r["warn"]
+    assert r["status"] == 3 and any("not after the FMU's time" in m for m in r["log"]), r
+    assert r["t"] == 1e20
+
+
 def node_session(name):
     args = {"port": free_port(), "prefix": f"test/{uuid.uuid4().hex[:8]}"}
     return session(name, **args)
