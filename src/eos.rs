@@ -126,8 +126,8 @@ impl EosConfig {
         (rho.is_finite() && rho > 0.0).then_some(rho)
     }
 
-    /// Entropy proxy s = (P + P∞)/ρ^γ for the compatible energy split's weights (CRKSPH spec
-    /// §5, eqs 62–63); `None` for the barotropic laws, whose split is then even (f = ½).
+    /// Entropy proxy s = (P + P∞)/ρ^γ for the compatible energy split's weights (Frontiere, Raskin
+    /// & Owen (2017) §3.3, eqs 62–63); `None` for the barotropic laws, whose split is then even (f = ½).
     #[inline]
     pub fn entropy_proxy(&self, rho: f64, u: f64) -> Option<f64> {
         match *self {

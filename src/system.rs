@@ -300,7 +300,7 @@ impl<const D: usize> System<D> {
     }
 
     /// [`Self::gather`] with one output slot per listed pair as well (in list order), for
-    /// schemes that keep pair forces (the compatible energy update, CRKSPH spec §5).
+    /// schemes that keep pair forces (the compatible energy update, Frontiere, Raskin & Owen (2017) §3.3; eqs 56–68).
     pub fn gather_pairs<T: Send, Q: Send, F>(&self, out: &mut [T], per_pair: &mut [Q], f: F)
     where
         F: Fn(usize, &mut T, &mut Q, &Pair<D>) + Sync,

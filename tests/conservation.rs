@@ -55,7 +55,7 @@ fn energy_error_converges_with_step_size() {
 #[test]
 fn compatible_schemes_conserve_energy_to_round_off() {
     // CRKSPH and compSPH (with and without Cullen–Dehnen) take the final u from the compatible
-    // update (CRKSPH spec §5): total energy to round-off, not to the integrator's accuracy.
+    // update (Frontiere, Raskin & Owen (2017) §3.3; eqs 56–68): total energy to round-off, not to the integrator's accuracy.
     // PSPH integrates du/dt: momentum to round-off, energy to the integrator's accuracy.
     for (scheme, energy_tol) in [
         ("crksph", 1e-12),

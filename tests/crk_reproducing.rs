@@ -1,4 +1,4 @@
-//! CRKSPH reproducing kernels (spec §2, App A): linear fields and their gradients reproduced on
+//! CRKSPH reproducing kernels (Frontiere, Raskin & Owen (2017) §2.1; eqs 8–23; App A, App A): linear fields and their gradients reproduced on
 //! jittered 1D/2D/3D points, Σ V W^R = 1, Σ V ∇W^R = 0, and ∇A, ∇B against finite differences.
 
 use crate::common;
@@ -123,7 +123,7 @@ fn gradients_of_a_and_b_match_finite_differences() {
 
 #[test]
 fn density_is_exact_across_a_static_material_boundary() {
-    // CRKSPH spec §9.3 / claim 8: density 4 inside [0.25, 0.75]², 1 outside, equal spacing (the
+    // Frontiere, Raskin & Owen (2017) §4.2; App B / claim 8: density 4 inside [0.25, 0.75]², 1 outside, equal spacing (the
     // masses jump by 4), two materials; eq 76 gives the exact densities on the lattice, where
     // the SPH summation smears the jump.
     let text = format!(
@@ -131,7 +131,7 @@ fn density_is_exact_across_a_static_material_boundary() {
         common::header(2, 0.0, 1.0, "periodic", 1.6666666666666667)
     );
     let mut sim = Case::parse(&text).unwrap().build::<2>().unwrap();
-    // CRKSPH sets h = n_h Δx on a lattice (spec §7.3), uniform here; the build's SPH h solve
+    // CRKSPH sets h = n_h Δx on a lattice (Frontiere, Raskin & Owen (2017)), uniform here; the build's SPH h solve
     // would vary h across the jump. Rebuild the lists for the uniform h.
     let sph_rho = sim.sys.particles.rho.clone();
     sim.sys
@@ -180,7 +180,7 @@ fn density_is_exact_across_a_static_material_boundary() {
 fn pressure_force_is_exact_for_a_linear_pressure_and_conserves_momentum() {
     use sphfmu::scheme::crksph::forces::pressure_acceleration;
     // 1D uniform lattice with ρ = 1 and P = 1 + x: a = −∇P/ρ = −1 exactly away from the open
-    // ends (spec §4.2 consistency check).
+    // ends (Frontiere, Raskin & Owen (2017) eq 64; eq 38 without Q consistency check).
     let text = format!(
         "{}[kernel]\nname = \"septic-spline\"\neta = 2.0\n[time]\nt_end = 1.0\n[[region]]\nspacing = 0.01\ndensity = 1.0\npressure = 1.0\n",
         common::header(1, 0.0, 1.0, "open", 1.4)

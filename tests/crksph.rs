@@ -1,4 +1,4 @@
-//! CRKSPH against the paper's tests (CRKSPH spec §9): Sedov 2D (conservation to round-off,
+//! CRKSPH against the paper's tests (Frontiere, Raskin & Owen (2017)): Sedov 2D (conservation to round-off,
 //! shock radius), Noh 2D (post-shock density and shock position), the hydrostatic square
 //! (exact density, no motion), and the 1D acoustic wave's convergence order.
 
@@ -213,7 +213,7 @@ fn square_survives(n: usize, t_end: f64) {
     assert!(moved < 3e-12 / n as f64, "a particle moved {moved:e}");
 }
 
-/// L1 of the density perturbation of the 1D acoustic wave (spec §9.2) after `periods` periods
+/// L1 of the density perturbation of the 1D acoustic wave (Frontiere, Raskin & Owen (2017) §4.1) after `periods` periods
 /// with N equal-mass particles: Σ|ρ_i − ρ̄ − A sin 2πx_i|/N. The mean ρ̄ is taken out because
 /// summation density carries a uniform offset on a lattice (cubic spline, η = 1.2: 1.8e-3 in
 /// 1D), a thousand times the wave's amplitude and no part of the wave.

@@ -1,4 +1,4 @@
-//! The Cullen–Dehnen switch (CRKSPH spec §8.2): α rises at a shock and stays at α_min where
+//! The Cullen–Dehnen switch (Frontiere, Raskin & Owen (2017) App F): α rises at a shock and stays at α_min where
 //! the flow neither starts to converge nor shears it on; and the corrected gradient it uses is
 //! exact for a linear field.
 

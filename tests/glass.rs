@@ -1,4 +1,4 @@
-//! Glass initial conditions (Rosswog spec §8.1): a relaxed, isotropic particle set with a
+//! Glass initial conditions (Rosswog (2015) Sec. 7.1): a relaxed, isotropic particle set with a
 //! near-perfect partition of unity.
 
 use crate::common;

@@ -79,7 +79,7 @@ fn gradient_and_h_derivative_match_finite_differences() {
 
 #[test]
 fn septic_spline_matches_exact_values() {
-    // CRKSPH spec §1.1: w7(0)=151/315, w7(1)=397/1680, w7(2)=1/42, w7(3)=1/5040 in native units
+    // Frontiere, Raskin & Owen (2017) eq 81–82: w7(0)=151/315, w7(1)=397/1680, w7(2)=1/42, w7(3)=1/5040 in native units
     // (native support 4 = our 2h, so native η = 2q).
     let k = sphfmu::kernel::SepticSplineW7;
     for (eta, exact) in [
@@ -93,9 +93,9 @@ fn septic_spline_matches_exact_values() {
     }
 }
 
-/// Rosswog spec §2 quality indicators Q1–Q4 and the §3.6 / §4.8 reference errors on a
-/// periodic 2D hexagonal lattice (the spec's own independent computation, "[MINE] reference
-/// values"): density error ε_N = Q1 and the standard-gradient error of f = x.
+/// Rosswog (2015) Sec. 3.1–3.2 quality indicators Q1–Q4 and the Sec. 3.6 / 4.2.2 reference errors on a
+/// periodic 2D hexagonal lattice (reference values computed independently of this code when the
+/// kernels were specified, not the paper's own): density error ε_N = Q1 and the standard-gradient error of f = x.
 #[test]
 fn lattice_quality_matches_rosswog_reference_values() {
     use sphfmu::kernel::{CubicSplineM4, QuinticSplineM6, SincKernel, WendlandC6};
@@ -117,7 +117,7 @@ fn lattice_quality_matches_rosswog_reference_values() {
             "{} η={eta}: Q1 {:.3e} Q2 {:.1e} Q3 {:.1e} Q4 {:.3e} grad {:.3e} ({:.1} neighbours)",
             q.kernel, q.q1, q.q2, q.q3, q.q4, q.gradient_error, q.neighbours
         );
-        // The spec prints two significant digits.
+        // The reference values have two significant digits.
         assert!(
             (q.q1 - eps_n).abs() < 0.06 * eps_n,
             "{}: ε_N {} vs {eps_n}",

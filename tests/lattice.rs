@@ -56,7 +56,7 @@ fn lattices_reproduce_the_requested_density() {
     assert!(e < 2e-4, "2D cubic {e}");
     let (e, n) = mean_density_error::<2>(&periodic_box(2, "hexagonal", "cubic-spline", 1.2));
     println!("2D hexagonal, M4 η=1.2: mean |ρ/ρ0 − 1| = {e:.3e}, {n} particles");
-    // Rosswog spec §3.6: 9.0e-4 for M4, η = 1.2 on a perfect hexagonal lattice; here the
+    // Rosswog (2015) Sec. 3.6; also Sec. 4.2.3: 9.0e-4 for M4, η = 1.2 on a perfect hexagonal lattice; here the
     // 20 × 24-row box stretches the rows by < 4%.
     // measured 8.47e-4
     assert!(e < 1.2e-3, "2D hexagonal {e}");

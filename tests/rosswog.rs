@@ -30,7 +30,7 @@ seed = 5
     )
 }
 
-/// Mean |∇f − x̂| for f = x with each estimator of spec §3 (kernel, CE, LE, fIA, IA).
+/// Mean |∇f − x̂| for f = x with each estimator of Rosswog (2015) Sec. 3.2–3.6 (kernel, CE, LE, fIA, IA).
 fn gradient_errors(perturb: f64) -> [f64; 5] {
     use GradientEstimator::*;
     let sim = Case::parse(&hex_box(perturb))
@@ -61,7 +61,7 @@ fn gradient_errors(perturb: f64) -> [f64; 5] {
 fn ia_gradient_is_exact_on_a_perfect_lattice_and_loses_the_edge_when_perturbed() {
     let [sph, ce, le, fia, ia] = gradient_errors(0.0);
     println!("perfect hex lattice, M4 η=1.2: kernel {sph:.2e}, CE {ce:.2e}, LE {le:.2e}, fIA {fia:.2e}, IA {ia:.2e}");
-    // spec §3.6: kernel gradient ~2.6e-2 (M4, η = 1.2), CE = kernel on a perfect lattice,
+    // Rosswog (2015) Sec. 3.6; also Sec. 4.2.3: kernel gradient ~2.6e-2 (M4, η = 1.2), CE = kernel on a perfect lattice,
     // LE/fIA exact, IA ~10 orders better than the kernel gradient.
     assert!(sph > 5e-3, "kernel gradient unexpectedly exact: {sph:e}");
     assert!((ce - sph).abs() < 1e-3 * sph, "CE {ce:e} vs kernel {sph:e}");
@@ -168,7 +168,7 @@ fn gresho_l1(model: &str, spacing: f64) -> f64 {
 
 #[test]
 fn gresho_f1_converges_f4_does_not() {
-    // Rosswog spec §8.5: F1 ∝ N_1D^-1, F4 does not converge. Resolutions 32 and 64 per unit
+    // Rosswog (2015) Sec. 7.4: F1 ∝ N_1D^-1, F4 does not converge. Resolutions 32 and 64 per unit
     // length (1216 and 4736 particles on the hexagonal lattice), t = 1, P0 = 5.
     let f1 = [
         gresho_l1("gresho-f1.toml", 1.0 / 32.0),

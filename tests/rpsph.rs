@@ -1,5 +1,5 @@
 //! rpSPH (Abel 2011): Newton's first law for any particle arrangement, and the static-lattice
-//! noise test of the rpSPH spec §3.1 against standard SPH.
+//! noise test of the Abel (2011) Sec. 3.1; extra numbers in App. A against standard SPH.
 
 use crate::common;
 
@@ -93,7 +93,7 @@ fn kinetic_energy_after(scheme: &str, t_end: f64) -> f64 {
 
 #[test]
 fn static_lattice_kinetic_energy_stays_at_round_off() {
-    // rpSPH spec §3.1: 50² square lattice, ρ = 1, c_s = 1, γ = 1.4, 20 neighbours (η = 1.2616
+    // Abel (2011) Sec. 3.1; extra numbers in App. A: 50² square lattice, ρ = 1, c_s = 1, γ = 1.4, 20 neighbours (η = 1.2616
     // for M4 in 2D), α = 1, to t = 4 (four sound-crossing times).
     let rp = kinetic_energy_after("rpsph", 4.0);
     let std = kinetic_energy_after("standard", 4.0);

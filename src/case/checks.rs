@@ -47,7 +47,7 @@ fn one() -> f64 {
 }
 
 /// `[blast]`: energy added to the particle nearest `center` (u += E/m), the single-particle
-/// spike of the CRKSPH paper's Sedov test (spec §9.5, §11 item 14).
+/// spike of the CRKSPH paper's Sedov test (Rosswog (2015), a point the paper leaves open (decided here)).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Blast {

@@ -1,9 +1,9 @@
-//! Relaxation of a lattice into a glass (Rosswog spec §8.1, Eqs. 101–102): every movable
+//! Relaxation of a lattice into a glass (Rosswog (2015) Sec. 7.1, Eqs. 101–102): every movable
 //! particle is displaced by 0.9 r_s in a random direction, then moved repeatedly along the
 //! pseudo-force f_a = −Σ_b ∇_a W_ab(h0) (Wendland C6 at 2h, h0 = 2.2 V0^{1/D}) by
 //! δr_a = r0 f_a / f⁰_max with r0 = 0.5 r_s and f⁰_max the largest force of the first
-//! iteration, until max_a |δr_a| / r_s < tolerance. [AMBIG §8.1: one formula for every
-//! iteration, as the spec reads it.] r_s = ½ V0^{1/D}.
+//! iteration, until max_a |δr_a| / r_s < tolerance. [The paper leaves open whether f⁰_max is
+//! renewed; one formula for every iteration is our reading.] r_s = ½ V0^{1/D}.
 
 use super::ics::SplitMix64;
 use crate::domain::Domain;

@@ -69,7 +69,7 @@ pub struct Case {
     pub interfaces: Vec<Interface>,
     #[serde(default)]
     pub perturbation: Option<Perturbation>,
-    /// Relax the initial lattice into a glass (Rosswog spec §8.1).
+    /// Relax the initial lattice into a glass (Rosswog (2015) Sec. 7.1).
     #[serde(default)]
     pub glass: Option<GlassConfig>,
     /// Uniform body force per unit mass (length = dimension).

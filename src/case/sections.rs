@@ -174,7 +174,7 @@ fn default_lattice() -> Lattice {
 }
 
 /// A planar interface between regions, smoothed over `width` with a logistic profile
-/// f = f_lo + (f_hi − f_lo)/(1 + exp(−(x − position)/width)) (CRKSPH spec §9.4, sign fixed).
+/// f = f_lo + (f_hi − f_lo)/(1 + exp(−(x − position)/width)) (Frontiere, Raskin & Owen (2017) §4.3.1, sign fixed).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Interface {

@@ -3,13 +3,13 @@
 //!
 //! * `leapfrog` — kick-drift-kick, one evaluation per step (velocity-dependent forces use
 //!   the predicted v and u at the end of the drift).
-//! * `ssp-rk3` — Shu–Osher third-order strong-stability-preserving Runge–Kutta (Rosswog spec
-//!   §7.3), three evaluations per step.
-//! * `crk-rk2` — the one-evaluation "cheap synchronous" RK2 of the CRKSPH spec §7.1:
+//! * `ssp-rk3` — Shu–Osher third-order strong-stability-preserving Runge–Kutta (Rosswog
+//!   (2015) Sec. 6.5), three evaluations per step.
+//! * `crk-rk2` — the one-evaluation "cheap synchronous" RK2 of the Frontiere, Raskin & Owen (2017) §4:
 //!   predict to t+dt/2 with the previous midpoint derivatives, evaluate there, advance the
 //!   full step from the start state, then refresh ρ, h, P. When the scheme keeps its pair
 //!   accelerations ([`Scheme::pair_work`]) the final u comes from the compatible update
-//!   (CRKSPH spec §5) with the midpoint a_ij and v^{1/2} = (v⁰ + v¹)/2; otherwise from du/dt.
+//!   (Frontiere, Raskin & Owen (2017) §3.3; eqs 56–68) with the midpoint a_ij and v^{1/2} = (v⁰ + v¹)/2; otherwise from du/dt.
 //!
 //! Positions are wrapped / reflected only at the end of a full step, so the stage
 //! combinations never mix a wrapped and an unwrapped coordinate.

@@ -1,7 +1,7 @@
-//! B-spline kernels M4, M5, M6 and W7 (Rosswog spec §4.2–4.3, CRKSPH spec §1.1), stretched to 2h.
+//! B-spline kernels M4, M5, M6 and W7 (Rosswog (2015) Eq. 28, Frontiere, Raskin & Owen (2017) eq 81–82), stretched to 2h.
 //!
 //! Each is written in the mirrored form `Σ_i (−1)^i C(k+1,i) (l − q − i)_+^k` with `l` the
-//! native half-support, so the terms near the support edge do not cancel (CRKSPH spec §1.1).
+//! native half-support, so the terms near the support edge do not cancel (Frontiere, Raskin & Owen (2017) eq 81–82).
 
 use super::{stretched_sigma, Kernel, SUPPORT};
 use std::f64::consts::PI;
@@ -55,7 +55,7 @@ impl<const K: usize> Pieces<K> {
 /// Mirrored B-spline of degree `K` (order K+1) on native support `l = (K+1)/2` in units of
 /// the native h, evaluated at native argument `x`. Returns (w, dw/dx) without the 1/K! factor.
 /// Horner on the piece's polynomial (see [`Pieces`]): near the edge only t^K survives, so there
-/// is no cancellation there (CRKSPH spec §1.1), and no powi loop per term (the kernel dominated
+/// is no cancellation there (Frontiere, Raskin & Owen (2017) eq 81–82), and no powi loop per term (the kernel dominated
 /// CRKSPH's run time with the term-by-term sum).
 #[inline(always)]
 fn mirrored<const K: usize>(x: f64) -> (f64, f64) {
@@ -109,7 +109,7 @@ macro_rules! bspline_kernel {
     };
 }
 
-// Native normalisations of the 1/K!-scaled shapes on native support (K+1)/2 (CRKSPH spec §1.1
+// Native normalisations of the 1/K!-scaled shapes on native support (K+1)/2 (Frontiere, Raskin & Owen (2017) eq 81–82
 // table; for M5 computed symbolically: 1D 1, 2D 96·24/(1199π), 3D 24/(20π)). Rosswog's M4 shape
 // ¼(2−q)³ − (1−q)³ is 3/2 of ours, hence his 2/3, 10/(7π), 1/π. Every value is checked against
 // quadrature in tests/kernels.rs.

@@ -1,6 +1,6 @@
 //! Smoothing kernels.
 //!
-//! Convention (Rosswog spec §4.1): every kernel is stretched to a support of **2h**, so
+//! Convention (Rosswog (2015) Sec. 4): every kernel is stretched to a support of **2h**, so
 //! `W(r, h) = σ_D / h^D · w(q)` with `q = r/h ∈ [0, 2]`. A kernel whose native support is
 //! `l·h` is stretched with `w(q) = w_native(q·l/2)` and `σ_2h = (l/2)^D σ_lh`.
 //!
@@ -9,7 +9,7 @@
 //! [`neighbours_for_eta`]. Recommended η per kernel (Rosswog Table 3, "η used"): M4 1.2,
 //! M5 1.4, M6 1.6, W7 2.0, Wendland C2 1.6, C4 1.9, C6 2.2, W_H,n as in Table 3.
 //!
-//! CRKSPH's `n_h` convention (CRKSPH spec §1.4): `h_crk = Δx·n_h` with the kernel's native
+//! CRKSPH's `n_h` convention (Frontiere, Raskin & Owen (2017) §4; Table D.1): `h_crk = Δx·n_h` with the kernel's native
 //! support `η_max·h_crk`; the number of *radial* neighbours is `η_max·n_h`. Stretched to our 2h
 //! support the same kernel has radial neighbours `2η`, so `η = η_max·n_h/2` (W7 with n_h = 1
 //! gives η = 2: 4 radial neighbours, as the paper's comparisons fix).
@@ -70,7 +70,7 @@ pub enum KernelName {
     Liq,
     /// M6 with a quartic core and non-zero central slope, for comparison only.
     Qcm6,
-    /// The PSPH quintic of Hopkins (2015), CRKSPH spec eq G.13.
+    /// The PSPH quintic of Hopkins (2015), Frontiere, Raskin & Owen (2017) eq G.13.
     PsphQuintic,
 }
 
@@ -127,7 +127,7 @@ impl AnyKernel {
         })
     }
 
-    /// Support in the kernel's native units of h (CRKSPH spec Table D.1's η_max): the
+    /// Support in the kernel's native units of h (Frontiere, Raskin & Owen (2017) Table D.1's η_max): the
     /// B-splines W_k have (k+1)/2, Wendland and the PSPH quintic 1. CRKSPH and compSPH measure
     /// their viscosity's η = |x_ij|/h in these units.
     pub fn native_support(&self) -> f64 {
@@ -207,7 +207,7 @@ pub struct KernelEval {
     pub w: f64,
     /// ∂W/∂r (≤ 0); the gradient with respect to the first particle is `dwdr · r̂_ab`.
     pub dwdr: f64,
-    /// ∂W/∂h = −σ/h^{D+1} [D w + q w'] (Rosswog spec §4.1), needed by the grad-h terms.
+    /// ∂W/∂h = −σ/h^{D+1} [D w + q w'] (Rosswog (2015) Sec. 4), needed by the grad-h terms.
     pub dwdh: f64,
 }
 

@@ -1,7 +1,7 @@
-//! Peaked kernels of Rosswog's comparison (spec §4.6), both performing poorly by design:
+//! Peaked kernels of Rosswog's comparison (Rosswog (2015) Sec. 4), both performing poorly by design:
 //! LIQ (linear quartic, Valcke et al. 2010; Eq. 34) and QCM6 (quartic-core M6; Eq. 35).
 //! Their printed normalisations are rounded (LIQ's coefficients too), so σ is computed here
-//! by quadrature of the stretched shape (spec §4.6: "compute the normalisation numerically").
+//! by quadrature of the stretched shape (Rosswog (2015) Sec. 4: "compute the normalisation numerically").
 
 use super::{Kernel, SUPPORT};
 use std::f64::consts::PI;

@@ -1,6 +1,6 @@
-//! PSPH quintic (CRKSPH spec §1.3, eq G.13; Hopkins 2015): the M6 quintic B-spline rescaled to
+//! PSPH quintic (Frontiere, Raskin & Owen (2017) eq G.13, eq G.13; Hopkins 2015): the M6 quintic B-spline rescaled to
 //! native support 1, stretched here to 2h (`w(q) = ψ(q/2)`, σ_2h = σ_1/2^D). Normalisations
-//! (spec §1.3): 1D 243/40, 2D 15309/(478π), 3D 2187/(40π).
+//! (Frontiere, Raskin & Owen (2017) eq G.13): 1D 243/40, 2D 15309/(478π), 3D 2187/(40π).
 
 use super::{stretched_sigma, Kernel, SUPPORT};
 use std::f64::consts::PI;
@@ -37,7 +37,7 @@ impl Kernel for PsphQuintic {
         stretched_sigma(native[dim - 1], 1.0, dim)
     }
     fn default_eta(&self) -> f64 {
-        // n_h = 4 with η_max = 1 (spec Table D.1): η = η_max·n_h/2
+        // n_h = 4 with η_max = 1 (Frontiere, Raskin & Owen (2017) Table D.1): η = η_max·n_h/2
         2.0
     }
     fn name(&self) -> String {

@@ -1,4 +1,4 @@
-//! The sinc ("harmonic-like") family W_H,n of Cabezón et al. (2008), Rosswog spec §4.4 (Eq. 32),
+//! The sinc ("harmonic-like") family W_H,n of Cabezón et al. (2008), Rosswog (2015) Eq. 32 (Eq. 32),
 //! native support 2: w(q) = [sin(πq/2)/(πq/2)]^n. Normalisations from Rosswog's Table 1
 //! (checked there by quadrature to 8 digits; again in tests/kernels.rs).
 

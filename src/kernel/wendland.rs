@@ -1,4 +1,4 @@
-//! Wendland kernels C2, C4, C6 (CRKSPH spec §1.2, Rosswog spec §4.5), native support 1,
+//! Wendland kernels C2, C4, C6 (Frontiere, Raskin & Owen (2017) eq D.1–D.3, Rosswog (2015) Eq. 33), native support 1,
 //! stretched to 2h: `w(q) = ψ(q/2)`, σ_2h = σ_1/2^D. In 1D the same polynomials are used
 //! (positive definite there too); σ_1D computed symbolically: C2 3/2, C4 27/16, C6 15/8.
 

@@ -1,4 +1,4 @@
-//! Compatible energy update with the entropy-weighted pairwise work split (CRKSPH spec §5;
+//! Compatible energy update with the entropy-weighted pairwise work split (Frontiere, Raskin & Owen (2017) §3.3; eqs 56–68;
 //! Frontiere, Raskin & Owen 2017, eqs 56–68; Owen 2014), shared by CRKSPH and compSPH.
 //!
 //! The final-stage evaluation keeps every pair acceleration a_ij (Σ_j a_ij = a_i exactly, and
@@ -7,7 +7,7 @@
 //! Σ m(½v² + u) changes only by the work of external forces, to round-off. The entropy weight
 //! f_ij (eqs 62–63, 67) heats the lower-entropy side and cools the higher-entropy side first.
 //!
-//! Decision (spec §11 item 6): s = P/ρ^γ is taken at the start of the step, as Spheral does.
+//! Decision (Frontiere, Raskin & Owen (2017), a point the paper leaves open (decided here)): s = P/ρ^γ is taken at the start of the step, as Spheral does.
 
 use crate::neighbours::{unpack, NeighbourList};
 use crate::particles::Vector;

@@ -1,12 +1,12 @@
-//! Compatible SPH, "compSPH" (CRKSPH spec §8.1, App E; Owen 2014): grad-h summation density,
+//! Compatible SPH, "compSPH" (Frontiere, Raskin & Owen (2017) App E, App E; Owen 2014): grad-h summation density,
 //!
 //!   a_ij = −m_j [ P_i/(Ω_iρ_i²) ∇W_i + P_j/(Ω_jρ_j²) ∇W_j + ½(Π_i ∇W_i + Π_j ∇W_j) ]   (E.2)
 //!   du_i/dt = Σ_j m_j [P_i/(Ω_iρ_i²) + ½Π_i] v_ij·∇W_i                               (E.3)
 //!
 //! with ∇W_i = ∇_i W(x_ij, h_i), Π_i = Q_i/ρ_i² the *unlimited* Monaghan–Gingold pressure of
-//! spec §6 per side (E.7–E.9), and the final u from the compatible update with the entropy
-//! weights (spec §5) — interim u from E.3. The E.1–E.6 text was lost in the paper's extraction;
-//! this is the standard form the spec rebuilds ([R], item 1). With `cullen_dehnen` the
+//! Frontiere, Raskin & Owen (2017) §3.2; eqs 45–55; 69–74 per side (E.7–E.9), and the final u from the compatible update with the entropy
+//! weights (Frontiere, Raskin & Owen (2017) §3.3; eqs 56–68) — interim u from E.3. The E.1–E.6 text was lost in the paper's extraction;
+//! this is the standard form of compatible SPH, rebuilt here (an open point, decided here). With `cullen_dehnen` the
 //! coefficients become C_l,ij = ½(α_i + α_j) C_l (and C_q alike) from [`super::cullen`].
 //! The paper's kernel: W5 (our quintic spline M6, native support 3) with n_h = 4/3, η = 2.
 
@@ -148,7 +148,7 @@ impl<const D: usize> Scheme<D> for Compsph<D> {
                 *slot = a_ij;
                 o.acc += a_ij;
                 o.dudt += m_j * (pterm[i] + 0.5 * pi_i) * vij.dot(&gi);
-                // spec §7.2 (compSPH: 1×Q)
+                // Frontiere, Raskin & Owen (2017) (compSPH: 1×Q)
                 o.q_max = o.q_max.max(qi);
                 o.approach = o.approach.max(-vij.dot(&rhat));
             });

@@ -1,9 +1,9 @@
-//! Cullen & Dehnen (2010) viscosity switch in Hopkins' form (CRKSPH spec §8.2, App F, eqs
+//! Cullen & Dehnen (2010) viscosity switch in Hopkins' form (Frontiere, Raskin & Owen (2017) App F, App F, eqs
 //! F.3–F.6), usable with compSPH, standard SPH and PSPH: every particle carries a viscosity
 //! coefficient α_i that rises when the flow starts to converge (∂t ∇·v < 0) and decays
 //! otherwise, limited in shear.
 //!
-//! Decisions for spec §11 item 10, made here:
+//! Decisions for Frontiere, Raskin & Owen (2017), a point the paper leaves open (decided here), made here:
 //! * β_ξ = 1 (Hopkins); ξ_i uses the neighbour's sgn(∇·v_j) (F.4 as Spheral codes it).
 //! * F.5's denominator is α_max|∂t∇·v| + β_c c_i² (f_kern h_i)⁻², the paper's c_i² (Spheral
 //!   uses v_sig²), with h_i the kernel support (our 2h).
@@ -17,7 +17,7 @@ use crate::system::System;
 use nalgebra::SMatrix;
 use rayon::prelude::*;
 
-/// Constants of the switch (spec §8.2, [P]).
+/// Constants of the switch (Frontiere, Raskin & Owen (2017) App F, [P]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CullenParams {
     pub alpha_min: f64,

@@ -37,7 +37,7 @@ pub trait Scheme<const D: usize>: Send + Sync {
     /// Hook after each completed step (switch evolution).
     fn end_step(&mut self, _sys: &mut System<D>, _dt: f64) {}
     /// Pair accelerations of the latest evaluation, for schemes whose final thermal energy
-    /// comes from the compatible update (CRKSPH spec §5) rather than from du/dt. The
+    /// comes from the compatible update (Frontiere, Raskin & Owen (2017) §3.3; eqs 56–68) rather than from du/dt. The
     /// `crk-rk2` integrator uses them; the others integrate du/dt.
     fn pair_work(&self) -> Option<&compatible::PairWork<D>> {
         None
@@ -85,7 +85,7 @@ pub enum SchemeConfig {
     Standard(standard::StandardParams),
     /// Relative-pressure SPH (Abel 2011), see [`rpsph`].
     Rpsph(rpsph::RpsphParams),
-    /// Rosswog (2015) formulations, see [`rosswog`]: the spec table's presets; any key
+    /// Rosswog (2015) formulations, see [`rosswog`]: the paper's formulations F1–F4 as presets; any key
     /// given overrides the preset.
     #[serde(rename = "rosswog-f1")]
     RosswogF1(rosswog::RosswogOverrides),
@@ -159,7 +159,7 @@ impl SchemeConfig {
     /// Kernel and η a scheme runs with when the case has no `[kernel]` table.
     pub fn preferred_kernel(&self) -> (crate::kernel::KernelName, Option<f64>) {
         use crate::kernel::KernelName;
-        // CRKSPH spec Table D.1, η = η_max·n_h/2: W7 with n_h = 1 → η = 2.
+        // Frontiere, Raskin & Owen (2017) Table D.1, η = η_max·n_h/2: W7 with n_h = 1 → η = 2.
         match self {
             SchemeConfig::Crksph(_) => return (KernelName::SepticSpline, Some(2.0)),
             // W5 (our M6, native support 3) with n_h = 4/3
@@ -181,12 +181,12 @@ impl SchemeConfig {
 
     /// Integrator and Courant factor a scheme runs with when `[time]` does not say.
     pub fn preferred_integrator(&self) -> (crate::integrate::IntegratorKind, f64) {
-        // CRKSPH spec §7.1: the modified RK2 with CFL 0.25 for every scheme of that paper.
+        // Frontiere, Raskin & Owen (2017) §4: the modified RK2 with CFL 0.25 for every scheme of that paper.
         if self.crksph_paper() {
             return (crate::integrate::IntegratorKind::CrkRk2, 0.25);
         }
         match self.rosswog() {
-            // Rosswog spec §7.3: SSP-RK3 with C = 0.5.
+            // Rosswog (2015) Sec. 6.5: SSP-RK3 with C = 0.5.
             Some(_) => (crate::integrate::IntegratorKind::SspRk3, 0.5),
             None => (crate::integrate::IntegratorKind::Leapfrog, 0.3),
         }

@@ -1,5 +1,5 @@
 //! Per-particle pair sums shared by the CRKSPH paper's schemes (CRKSPH, compSPH, PSPH) and
-//! their time-step rule (CRKSPH spec §7.2): dt = C · min(l/c, l/√(Q_max/ρ), l/approach speed,
+//! their time-step rule (Frontiere, Raskin & Owen (2017)): dt = C · min(l/c, l/√(Q_max/ρ), l/approach speed,
 //! 1/|∇·v|) with the nodal spacing l = h/η. Writing v_sig = η·max(c, √(Q_max/ρ), approach) and
 //! at least h|∇·v| lets the driver's C·h/v_sig apply exactly that rule.
 

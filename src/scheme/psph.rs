@@ -1,4 +1,4 @@
-//! Pressure–energy SPH, PSPH (CRKSPH spec §8.3, App G; Hopkins 2015 after Saitoh & Makino's
+//! Pressure–energy SPH, PSPH (Frontiere, Raskin & Owen (2017) App G; Hopkins 2015 App F2; after DISPH, App G; Hopkins 2015 after Saitoh & Makino's
 //! DISPH), with the Cullen–Dehnen switch and Hopkins' artificial conductivity:
 //!
 //!   P_i = Σ_j (γ−1) m_j u_j W_i,  ρ_i = Σ_j m_j W_i,  n_i = Σ_j W_i   (G.1–G.3, self included)
@@ -6,11 +6,11 @@
 //!   du_i/dt = Σ_j m_j (γ−1)² u_i u_j (f_ij/P_i) v_ij·∇W_i + ½ Σ_j m_j v_ij·q_ij + conduction
 //!
 //! with W_i = W(x_ij, h_i), the grad-h factor f_ij of G.7–G.9 and q_ij of G.6.
-//! Decisions (spec §11 item 11 and gaps), made here:
+//! Decisions (Frontiere, Raskin & Owen (2017), a point the paper leaves open (decided here) and gaps), made here:
 //! * G.4 pairs f_ij with P_i and ∇W_i ([R]); q_ij sits inside the m_j sum.
-//! * Π_i = Q_i/ρ_i² from the unlimited Monaghan–Gingold Q of spec §6 with C_l,ij = ½(α_i+α_j)C_l
+//! * Π_i = Q_i/ρ_i² from the unlimited Monaghan–Gingold Q of Frontiere, Raskin & Owen (2017) §3.2; eqs 45–55; 69–74 with C_l,ij = ½(α_i+α_j)C_l
 //!   (and C_q alike), so q_ij = ½(Q_i/ρ_i + Q_j/ρ_j)(∇W_i + ∇W_j)/(ρ_i + ρ_j). Base C_l = η_max/2,
-//!   C_q = η_max/4 (spec Table D.1's scaling; 0.5 and 0.25 for the PSPH quintic).
+//!   C_q = η_max/4 (Frontiere, Raskin & Owen (2017) Table D.1's scaling; 0.5 and 0.25 for the PSPH quintic).
 //! * The paper evolves the total energy (G.5); we integrate the equivalent u equation above,
 //!   so total energy is conserved to the integrator's accuracy, not to round-off.
 //! * Conduction (G.10–G.12) projects ∇W_i + ∇W_j on x̂_ij ([R]); α_C = 0.25.

@@ -1,4 +1,4 @@
-//! Relative-pressure SPH (Abel 2011, "rpSPH"; spec `rpsph.md` §1.3): standard SPH with the
+//! Relative-pressure SPH (Abel 2011, "rpSPH"; Abel (2011)): standard SPH with the
 //! pressure force replaced by a_a = −Σ_b m_b (P_b − P_a)/ρ_b² ∇W. Density, h, viscosity,
 //! conductivity and time stepping are the standard scheme's. A uniform pressure exerts no
 //! force for any particle arrangement (Newton's first law), at the price of exact momentum

@@ -1,5 +1,5 @@
-//! Smoothing lengths and summation density with generalised volume elements (Rosswog spec
-//! §5, Eqs. 36–38): κ_a = Σ_b X_b W_ab(h_a), V_a = X_a/κ_a, ρ_a = m_a/V_a, h_a = η V_a^{1/D},
+//! Smoothing lengths and summation density with generalised volume elements (Rosswog
+//! (2015) Sec. 5, Eqs. 36–38): κ_a = Σ_b X_b W_ab(h_a), V_a = X_a/κ_a, ρ_a = m_a/V_a, h_a = η V_a^{1/D},
 //! solved by safeguarded Newton–Raphson per particle to |Δρ|/ρ < 1e-4, and the grad-h factors
 //! Ω_a = 1 + h_a/(D κ_a) Σ_b X_b ∂W_ab(h_a)/∂h_a (Eq. 51). X = m (the default) is standard
 //! SPH's summation density ρ_a = Σ_b m_b W_ab(h_a).

@@ -1,4 +1,4 @@
-//! "Traditional" SPH, the baseline every paper compares with (Rosswog spec §6.2 with X = m;
+//! "Traditional" SPH, the baseline every paper compares with (Rosswog (2015) with X = m;
 //! Price 2012 review): grad-h momentum and energy equations, Monaghan–Gingold artificial
 //! viscosity with the Balsara (1995) switch, optional Price (2008) artificial conductivity.
 //!
@@ -33,7 +33,7 @@ pub struct StandardParams {
     /// ε in μ_ab's denominator, (0, 1].
     pub epsilon: f64,
     /// Per-particle α from the Cullen–Dehnen switch (replaces Balsara; α and β both scale
-    /// with ½(α_a + α_b), CRKSPH spec §8.2).
+    /// with ½(α_a + α_b), Frontiere, Raskin & Owen (2017) App F).
     pub cullen_dehnen: bool,
     /// Density by summation (default) or evolved by the continuity equation
     /// dρ_a/dt = Σ_b m_b v_ab·∇_a W_ab(h_a) with h_a = η (m_a/ρ_a)^{1/D} — the usual choice for
@@ -320,13 +320,13 @@ pub(crate) fn velocity_gradients<const D: usize>(
 /// The pressure part of the pair force: the one place where standard SPH and rpSPH differ.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum PressureForm {
-    /// Standard grad-h form (Rosswog spec §6.2 with X = m; rpSPH spec eq. 2).
+    /// Standard grad-h form (Rosswog (2015) with X = m; Abel (2011) eq. 2).
     GradH,
-    /// rpSPH (Abel 2011, rpSPH spec §1.3): a_a = −Σ m_b (P_b − P_a)/ρ_b² ∇W, with ∇_a W_ab(h_a)
+    /// rpSPH (Abel 2011, Abel (2011)): a_a = −Σ m_b (P_b − P_a)/ρ_b² ∇W, with ∇_a W_ab(h_a)
     /// (eq. 4, `symmetric = false`) or ∇̄W (Appendix B variant, `symmetric = true`); when
     /// `shock_switch`, particles with −h ∇·v > 3c use GradH (§3.7). Energy: eq. 18 as printed,
-    /// du_a/dt = Σ m_b P_b/ρ_b² v_ab·∇_a W_ab(h_a) — the spec flags ρ_b ρ_b vs ρ_a ρ_b as
-    /// ambiguous; we implement the printed ρ_b² (decision recorded here, in one place).
+    /// du_a/dt = Σ m_b P_b/ρ_b² v_ab·∇_a W_ab(h_a) — the printed text is ambiguous between
+    /// ρ_b ρ_b and ρ_a ρ_b; we implement the printed ρ_b² (decision recorded here, in one place).
     Relative { symmetric: bool, shock_switch: bool },
 }
 

@@ -1,4 +1,4 @@
-//! Kernel quality on a perfect periodic 2D hexagonal lattice (Rosswog spec §2, §3.6, §4.8):
+//! Kernel quality on a perfect periodic 2D hexagonal lattice (Rosswog (2015) Sec. 3.1–3.2):
 //! the indicators Q1–Q4 and the errors of the summation density and of the standard SPH
 //! gradient of f = x, averaged over particles.
 

@@ -1,4 +1,4 @@
-//! Radially symmetric exact solutions (Sedov–Taylor blast, Noh implosion; CRKSPH spec §9.5–9.6)
+//! Radially symmetric exact solutions (Sedov–Taylor blast, Noh implosion; Frontiere, Raskin & Owen (2017) §4.3.2)
 //! and the errors of a particle set against them: L1 of ρ, the shock position from the binned
 //! density profile, and the mean post-shock density.
 
@@ -73,7 +73,7 @@ impl RadialExact {
             } => {
                 let nu = dim as i32;
                 if r < self.shock_radius() {
-                    // all inflow kinetic energy turned into heat: u = v0²/2 (spec §9.6)
+                    // all inflow kinetic energy turned into heat: u = v0²/2 (Frontiere, Raskin & Owen (2017) §4.3.3)
                     let rho = rho0 * ((gamma + 1.0) / (gamma - 1.0)).powi(nu);
                     RadialState {
                         rho,
@@ -81,7 +81,7 @@ impl RadialExact {
                         p: (gamma - 1.0) * rho * 0.5 * speed * speed,
                     }
                 } else {
-                    // pre-shock compression (1 + v0 t/r)^{ν−1} (spec §11 item 4)
+                    // pre-shock compression (1 + v0 t/r)^{ν−1} (Frontiere, Raskin & Owen (2017), a point the paper leaves open (decided here))
                     RadialState {
                         rho: rho0 * (1.0 + speed * t / r.max(1e-300)).powi(nu - 1),
                         v: -speed,

@@ -1,4 +1,4 @@
-//! The Sedov–Taylor point blast (CRKSPH spec §9.5): the self-similar solution, integrated
+//! The Sedov–Taylor point blast (Frontiere, Raskin & Owen (2017) §4.3.2): the self-similar solution, integrated
 //! from the strong-shock jump inwards.
 //!
 //! With r_s = β (E t²/ρ0)^{1/(ν+2)}, δ = 2/(ν+2), ξ = r/r_s and v = ṙ_s f(ξ), ρ = ρ0 g(ξ),

@@ -1,4 +1,4 @@
-//! The Gresho–Chan vortex (Rosswog spec §8.5, Eqs. 104–105): a stationary solution of the
+//! The Gresho–Chan vortex (Rosswog (2015) Sec. 7.4, Eqs. 104–105): a stationary solution of the
 //! Euler equations with ρ = 1, used for the L1 velocity norm of Eq. 106.
 
 use serde::{Deserialize, Serialize};
@@ -12,7 +12,7 @@ pub struct Gresho {
     pub radius: f64,
     #[serde(default = "default_v0")]
     pub v0: f64,
-    /// The literature's P0 = 5 (P0/ρv0² = 5); the paper's scaled numbers imply 0.5 (spec §8.5).
+    /// The literature's P0 = 5 (P0/ρv0² = 5); the paper's scaled numbers imply 0.5 (Rosswog (2015) Sec. 7.4).
     #[serde(default = "default_p0")]
     pub p0: f64,
 }

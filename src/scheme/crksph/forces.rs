@@ -1,8 +1,8 @@
-//! CRKSPH pressure forces (spec §4.2, eq 64 without Q): the pair acceleration on i from j is
+//! CRKSPH pressure forces (Frontiere, Raskin & Owen (2017) eq 64; eq 38 without Q, eq 64 without Q): the pair acceleration on i from j is
 //! a_ij = −(1/(2 m_i)) V_i V_j (P_i + P_j)(G_ij − G_ji), with G_ji the corrected-kernel
 //! gradient seen from j (its own coefficients, x_ji = −x_ij, ∇_j W_ji = −∇_i W_ij). Since
 //! m_i a_ij = −m_j a_ji, linear momentum is conserved to round-off; the force is not central,
-//! so angular momentum only approximately (spec App C).
+//! so angular momentum only approximately (Frontiere, Raskin & Owen (2017) App C).
 
 use super::reproducing::{PairKernel, RkCoefficients};
 use crate::particles::Vector;

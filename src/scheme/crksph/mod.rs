@@ -1,18 +1,19 @@
-//! CRKSPH (Frontiere, Raskin & Owen 2017; spec `crksph.md`): linear reproducing kernels (§2),
-//! mass-over-volume density (§3, eq 76), the antisymmetrised momentum equation (§4.2, eq 64),
-//! the thermal-energy derivative (§4.3, eq 78) for interim values, the compatible energy update
-//! (§5, see [`crate::scheme::compatible`]) for the final one, and the limited viscosity (§6).
+//! CRKSPH (Frontiere, Raskin & Owen 2017): linear reproducing kernels (§2.1, eqs 8–23),
+//! mass-over-volume density (eq 76), the antisymmetrised momentum equation (§3.1, eq 64),
+//! the thermal-energy derivative (eq 78) for interim values, the compatible energy update
+//! (§3.3, see [`crate::scheme::compatible`]) for the final one, and the limited viscosity
+//! (§3.2, eqs 45–55, 69–74).
 //!
-//! Decisions for the spec's open points (§11), made here and nowhere else:
-//! * h (§7.3, item 8): the number-density form of the "simple, robust substitute",
+//! Decisions on the points the paper leaves open, made here and nowhere else (numbered items):
+//! * h (item 8): the number-density form of the "simple, robust substitute",
 //!   h_i = η V_i^{1/ν} with V_i = 1/Σ_j W(x_ij, h_i) (eq 75). At t = 0 it is solved by the
 //!   Newton iteration of [`smoothing`] with weights X = 1; afterwards, as IdealH does, the
 //!   midpoint evaluation computes h_ideal = η V^{1/ν} (one fixed-point step, the relation
-//!   hardly depends on h) and the end-of-step state takes h¹ = h_ideal (spec §7.1 step 4).
+//!   hardly depends on h) and the end-of-step state takes h¹ = h_ideal (Frontiere, Raskin & Owen (2017) §4 step 4).
 //!   Like IdealH it depends on the point distribution only, not on masses, so an equally
-//!   spaced multi-material lattice keeps one h (spec §9.3).
+//!   spaced multi-material lattice keeps one h (Frontiere, Raskin & Owen (2017) §4.2; App B).
 //! * ρ: eq 76 at every evaluation (midpoint and end of step); no continuity equation (eq 79).
-//! * Integrator (item 7): `crk-rk2`, Spheral's CheapSynchronousRK2 (spec §7.1), CFL 0.25.
+//! * Integrator (item 7): `crk-rk2`, Spheral's CheapSynchronousRK2 (Frontiere, Raskin & Owen (2017) §4), CFL 0.25.
 //! * Time step (§7.2): the scheme writes v_sig = η·max(c, √(Q_max/ρ), approach speed) and
 //!   h|∇·v|, so the driver's C·h/v_sig is C·l/max(...) with the nodal spacing l = h/η.
 //! * η_fold (item 9): the paper's 0.2; Q_j in the energy equation as printed (eq 78), not
@@ -45,7 +46,7 @@ pub enum OrderName {
 }
 
 /// Parameters of `[scheme] name = "crksph"`. Unset viscosity constants follow the kernel
-/// (spec Table D.1): C_l = η_max/2, C_q = η_max/4 (W7: 2 and 1), η_crit = 1/n_h.
+/// (Frontiere, Raskin & Owen (2017) Table D.1): C_l = η_max/2, C_q = η_max/4 (W7: 2 and 1), η_crit = 1/n_h.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CrksphParams {
@@ -94,7 +95,7 @@ impl CrksphParams {
 
     /// Viscosity constants for a kernel of native support `eta_max` run at our η.
     pub fn viscosity(&self, eta_max: f64, eta: f64) -> ViscosityParams {
-        // n_h = 2η/η_max (kernel module doc); η_crit = 1/n_h (spec §6)
+        // n_h = 2η/η_max (kernel module doc); η_crit = 1/n_h (Frontiere, Raskin & Owen (2017) §3.2; eqs 45–55; 69–74)
         let n_h = 2.0 * eta / eta_max;
         ViscosityParams {
             c_l: self.c_l.unwrap_or(0.5 * eta_max),
@@ -133,7 +134,7 @@ impl<const D: usize> Crksph<D> {
         }
     }
 
-    /// h and V (eq 75), the correction coefficients, ρ (eq 76) and the EOS (spec §7.4 steps 1–4).
+    /// h and V (eq 75), the correction coefficients, ρ (eq 76) and the EOS (Frontiere, Raskin & Owen (2017) steps 1–4).
     #[allow(clippy::type_complexity)]
     fn state(
         &mut self,
@@ -237,7 +238,7 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
                 *slot = a_ij;
                 o.acc += a_ij;
                 o.dudt += 0.5 * vv * (p.pressure[j] + qj) * vij.dot(&dg);
-                // spec §7.2: Q_max = max 4 Q_i, approach speed max(0, (v_j − v_i)·x̂_ij)
+                // Frontiere, Raskin & Owen (2017): Q_max = max 4 Q_i, approach speed max(0, (v_j − v_i)·x̂_ij)
                 o.q_max = o.q_max.max(4.0 * qi);
                 if pr.r > 0.0 {
                     o.approach = o.approach.max(-vij.dot(&pr.dx) / pr.r);

@@ -1,11 +1,11 @@
-//! Linear reproducing kernels (CRKSPH spec §2; Frontiere, Raskin & Owen 2017, eqs 8–23).
+//! Linear reproducing kernels (Frontiere, Raskin & Owen (2017) §2.1; eqs 8–23; App A; Frontiere, Raskin & Owen 2017, eqs 8–23).
 //!
 //! Volumes V_i = 1/Σ_j W(x_ij, h_i) (eq 75, gather kernel, self included). With the symmetrised
 //! kernel W_ij = ½[W(x_ij, h_i) + W(x_ij, h_j)] and ∇_i W_ij = ½[∇W(h_i) + ∇W(h_j)] the moments
 //! m0, m1, m2 and their gradients (eqs 16–21, sums over j including i) give
 //! B = −m2⁻¹ m1, A = 1/(m0 + B·m1), ∂A = −A²(∂m0 + 2 B^α ∂m1^α + B^α B^β ∂m2^{αβ}),
-//! ∂B^α = −M^{αβ}(∂m1^β + ∂m2^{βψ} B^ψ) (compact forms of eqs 14–15, spec §2.3), and the
-//! corrected kernel W^R_ij = A_i(1 + B_i·x_ij) W_ij with gradient G_ij (eq 9, spec §2.4).
+//! ∂B^α = −M^{αβ}(∂m1^β + ∂m2^{βψ} B^ψ) (compact forms of eqs 14–15, Frontiere, Raskin & Owen (2017) eqs 12–15; App A; compact forms R; verified), and the
+//! corrected kernel W^R_ij = A_i(1 + B_i·x_ij) W_ij with gradient G_ij (eq 9, Frontiere, Raskin & Owen (2017) eqs 8–9).
 //! Gradients are with respect to the evaluation point x_i, V_j and h held fixed; every node,
 //! including i itself, stays where it is (so the self term contributes V_i W(0) δ^{αγ} to ∂m1).
 
@@ -59,7 +59,7 @@ impl<const D: usize> RkCoefficients<D> {
     }
 
     /// W^R_ij and its gradient G_ij for the pair separation x_ij = x_i − x_j with the
-    /// symmetrised kernel value `w` and gradient `gw` (spec §2.4).
+    /// symmetrised kernel value `w` and gradient `gw` (Frontiere, Raskin & Owen (2017) eqs 8–9).
     #[inline]
     pub fn corrected(&self, xij: &Vector<D>, w: f64, gw: &Vector<D>) -> (f64, Vector<D>) {
         let lin = 1.0 + self.b.dot(xij);
@@ -256,7 +256,7 @@ pub fn coefficients<const D: usize>(
     (out.into_iter().map(|o| o.0).collect(), fallbacks)
 }
 
-/// CRKSPH mass density (spec §3, eq 76): ρ_i = Σ_j m_ij V_j W^R_ij / Σ_j V_j² W^R_ij with
+/// CRKSPH mass density (Frontiere, Raskin & Owen (2017) eq 76, eq 76): ρ_i = Σ_j m_ij V_j W^R_ij / Σ_j V_j² W^R_ij with
 /// m_ij = m_j for the same material and m_i across materials; sums include j = i. On a uniform
 /// lattice this gives exact piecewise-constant densities across a static material boundary.
 pub fn density<const D: usize>(

@@ -1,4 +1,4 @@
-//! CRKSPH artificial viscosity with the RK-gradient limiter (spec §6, eqs 45–55, 69–74).
+//! CRKSPH artificial viscosity with the RK-gradient limiter (Frontiere, Raskin & Owen (2017) §3.2; eqs 45–55; 69–74, eqs 45–55, 69–74).
 //!
 //! The velocity gradient is the RK gradient of eq 54, ∂β v_i^α = −Σ_j V_j v_ij^α G_ij^β. Per
 //! pair the velocity jump is extrapolated to the midpoint with the van Leer limiter
@@ -11,7 +11,7 @@ use crate::particles::Vector;
 use crate::system::System;
 use nalgebra::SMatrix;
 
-/// Limiter and viscosity constants (CRKSPH spec §6; defaults for W7 with n_h = 1).
+/// Limiter and viscosity constants (Frontiere, Raskin & Owen (2017) §3.2; eqs 45–55; 69–74; defaults for W7 with n_h = 1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ViscosityParams {
     pub c_l: f64,

@@ -1,4 +1,4 @@
-//! Integral-approximation gradient matrices (Rosswog spec §3.4, Eqs. 20–25):
+//! Integral-approximation gradient matrices (Rosswog (2015) Eqs. 16–25, Eqs. 20–25):
 //! τ_a = Σ_b V_b (r_b − r_a)(r_b − r_a)ᵀ W_ab(h_a), C_a = τ_a⁻¹, and in the same pass the
 //! linearly exact fIA velocity gradient (∂v^i/∂x^k)_a = C_a^{kd} Σ_b V_b (v_b − v_a)^i (r_b − r_a)^d W_ab(h_a)
 //! that the dissipation triggers use in every formulation (§3.5).
@@ -45,7 +45,7 @@ pub fn invert<const D: usize>(tau: &SMatrix<f64, D, D>) -> Option<SMatrix<f64, D
     if !(tr > 0.0 && tr.is_finite()) {
         return None;
     }
-    // Analytic inverse (Rosswog spec §3.4): C = adj(τ)/det(τ).
+    // Analytic inverse (Rosswog (2015) Eqs. 16–25): C = adj(τ)/det(τ).
     let t = |i: usize, j: usize| tau[(i, j)];
     let mut c = SMatrix::<f64, D, D>::zeros();
     let det = match D {
@@ -138,7 +138,7 @@ pub fn ia_pass<const D: usize>(
     (mats, grads, fallbacks)
 }
 
-/// The gradient estimators of Rosswog spec §3 (Eqs. 6, 10, 11–15, 21, 23–24).
+/// The gradient estimators of Rosswog (2015) Sec. 3.2–3.6 (Eqs. 6, 10, 11–15, 21, 23–24).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum GradientEstimator {
     /// Σ_b V_b f_b ∇_a W_ab(h_a)

@@ -1,5 +1,5 @@
 //! Rosswog (2015), "Boosting the accuracy of SPH" — the Newtonian formulations F1–F4
-//! (spec `rosswog.md` §6–7). Four ingredients, each switchable:
+//! (its Secs. 5–6). Four ingredients, each switchable:
 //!
 //! * gradient: kernel gradients with grad-h terms (Eqs. 55/61) or the antisymmetric
 //!   integral approximation G_a = C_a (r_b − r_a) W_ab(h_a) (Eqs. 64/65, 66/67), Ω ≡ 1;
@@ -9,9 +9,9 @@
 //! * the per-particle dissipation parameter K: constant, or the shock and noise triggers of
 //!   §7.1 ([`triggers`]).
 //!
-//! The specific internal energy is evolved with du/dt = de/dt − v·dv/dt (spec §6.3), so
+//! The specific internal energy is evolved with du/dt = de/dt − v·dv/dt (Rosswog (2015)), so
 //! total energy is conserved in continuous time and pairwise antisymmetry keeps momentum
-//! exact. Angular momentum is not exact with IA (G_a is not along r_ab; spec §3.4).
+//! exact. Angular momentum is not exact with IA (G_a is not along r_ab; Rosswog (2015) Eqs. 16–25).
 
 pub mod gradients;
 pub mod triggers;
@@ -52,7 +52,7 @@ pub enum GradientOperator {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum SignalVelocity {
-    /// max(c_a, c_b) + max(0, −v_ab·ê): Galilean invariant (spec §6.5 [MINE]).
+    /// max(c_a, c_b) + max(0, −v_ab·ê): Galilean invariant (Rosswog (2015) Eqs. 77–79 [MINE]).
     Galilean,
     /// max(c_a + |v_a·ê|, c_b + |v_b·ê|): the literal Newtonian limit of Eq. 79.
     Literal,
@@ -77,7 +77,7 @@ pub struct RosswogParams {
     pub signal_velocity: SignalVelocity,
 }
 
-/// The four presets of the spec's table (§0).
+/// The four formulations F1–F4 the paper compares.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Preset {
     F1,
@@ -228,7 +228,7 @@ impl Rosswog {
         }
     }
 
-    /// Density, h and pressure; for X = P^k the ρ–P loop of spec §7.2 (steps a–e): one more
+    /// Density, h and pressure; for X = P^k the ρ–P loop of Rosswog (2015) Sec. 6.1.3 (steps a–e): one more
     /// density pass with the X of the new pressures. Our decision for bodies: in the first
     /// step the wall particles' X starts from the pressure they were generated with (not yet
     /// the wall condition's), so the loop repeats until X settles (max relative change
@@ -400,11 +400,11 @@ impl<const D: usize> Scheme<D> for Rosswog {
                     ra.c.max(rb.c) - w.min(0.0)
                 };
                 o.vsig = o.vsig.max(vsig);
-                // "Approaching" (spec §6.4: v_ab·r_ab < 0) beyond round-off: without this margin a
+                // "Approaching" (Rosswog (2015) Sec. 6.3: v_ab·r_ab < 0) beyond round-off: without this margin a
                 // static state's ±1e-16 velocities switch on the e* conduction term — which does
                 // not scale with w — across every density jump (our decision; the paper is silent).
                 if w < -APPROACH_TOLERANCE * ra.c.max(rb.c) {
-                    // Newtonian Chow–Monaghan dissipation (spec §6.4) with D_ab = ½(g_a + g_b).
+                    // Newtonian Chow–Monaghan dissipation (Rosswog (2015) Sec. 6.3) with D_ab = ½(g_a + g_b).
                     let dab = (ga + gb) * 0.5;
                     let kab = 0.5 * (ra.k + rb.k);
                     let rho_bar = 0.5 * (ra.rho + rb.rho);
@@ -420,7 +420,7 @@ impl<const D: usize> Scheme<D> for Rosswog {
         );
         sys.store_derivatives(t0, |a| {
             let (o, m) = (&out[a], recs[a].m);
-            // du/dt = (A_a/m_a) Σ X_b v_ab·g_a + de_diss − v_a·dv_diss (spec §6.3)
+            // du/dt = (A_a/m_a) Σ X_b v_ab·g_a + de_diss − v_a·dv_diss (Rosswog (2015))
             let du = recs[a].a / m * o.du_hydro + o.de_diss - recs[a].v.dot(&o.dv_diss);
             (o.dv / m + o.dv_diss, du, o.vsig)
         });

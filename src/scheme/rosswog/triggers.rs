@@ -1,7 +1,7 @@
-//! The dissipation parameter K_a (Rosswog spec §7.1, Eqs. 80–96): raised at once to
+//! The dissipation parameter K_a (Rosswog (2015) Eqs. 80–96, Eqs. 80–96): raised at once to
 //! K_des = max(K_shock, K_noise), otherwise decaying with τ = χ h / c_s.
 //!
-//! Decisions the paper leaves open (spec §7.1 (a)–(d), made here in one place):
+//! Decisions the paper leaves open (Rosswog (2015) Eqs. 80–96 (a)–(d), made here in one place):
 //! (a) the noise sums include b = a; (b) d(∇·v)/dt = [(∇·v)ⁿ − (∇·v)ⁿ⁻¹]/Δt between full
 //! steps, A = 0 on the first step; (c) K is updated once per full step, outside the RK stages:
 //! Kⁿ⁺¹ = max(K_des, K_min + (Kⁿ − K_min) e^{−Δt/τ}); (d) the noise sums run over all
