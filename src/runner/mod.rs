@@ -265,15 +265,15 @@ fn run_dim<const D: usize>(
             sim.advance_to(target, |s| {
                 updates += s.sys.particles.len() as f64;
                 let p = &s.sys.particles;
-                let fluid = |i: &usize| p.body[*i] == 0 && p.port[*i] == 0;
-                let scale: f64 = (0..p.len())
-                    .filter(fluid)
-                    .map(|i| p.mass[i] * p.vel[i].norm())
-                    .sum();
+                // Σ m|v| and the mass of the fluid, in one pass
+                let (scale, mass) = (0..p.len())
+                    .filter(|&i| p.body[i] == 0 && p.port[i] == 0)
+                    .fold((0.0, 0.0), |(s, m), i| {
+                        (s + p.mass[i] * p.vel[i].norm(), m + p.mass[i])
+                    });
                 max_abs_momentum = max_abs_momentum.max(scale);
                 // every integrator applies g over the whole step: Σ_steps M g dt exactly (the
                 // step's own dt: last_dt skips the shortened steps that land on a target)
-                let mass: f64 = (0..p.len()).filter(fluid).map(|i| p.mass[i]).sum();
                 let dt = s.time - t_prev;
                 t_prev = s.time;
                 for (k, g) in gravity_impulse.iter_mut().enumerate().take(D) {
