@@ -172,18 +172,53 @@ impl<const D: usize> System<D> {
     /// The working list: the master list cut to `max(2h_a, 2h_b)` once h is final, without
     /// wall–wall pairs unless the scheme asked for them (`wall_pairs`).
     pub fn compact_neighbours(&mut self) {
+        self.compact_neighbours_visiting(&mut vec![(); self.particles.len()], |_, _, _, _| {});
+    }
+
+    /// [`Self::compact_neighbours`], calling `visit(sys, a, &mut out[a], &pair)` on every pair kept,
+    /// in working-list order, as [`Self::gather`] would afterwards: a pass that needs only
+    /// the pairs' geometry and velocities (standard SPH's velocity gradients) rides on the
+    /// cut instead of walking the lists once more. `pair.index` is not known yet during the
+    /// cut (the row offsets come after it) and is `usize::MAX`.
+    pub fn compact_neighbours_visiting<T: Send, F>(&mut self, out: &mut [T], visit: F)
+    where
+        F: Fn(&Self, usize, &mut T, &Pair<D>) + Sync,
+    {
         let t0 = std::time::Instant::now();
-        let p = &self.particles;
-        let dom = &self.domain;
-        let k = &self.kernel;
-        self.neighbours = self.verlet.list.filtered(|a, e| {
+        let sys = &*self;
+        let p = &sys.particles;
+        let dom = &sys.domain;
+        let k = &sys.kernel;
+        let wall_pairs = sys.wall_pairs;
+        // What the cut reads of a neighbour, packed: one cache line instead of three.
+        let kin: Vec<(Vector<D>, Vector<D>, f64)> = (0..p.len())
+            .into_par_iter()
+            .map(|i| (p.pos[i], p.vel[i], k.radius(p.h[i])))
+            .collect();
+        let list = sys.verlet.list.filtered_with(out, |a, acc, e| {
             let (b, code) = unpack(e);
-            if !self.wall_pairs && p.body[a] != 0 && p.body[b] != 0 {
+            if !wall_pairs && p.body[a] != 0 && p.body[b] != 0 {
                 return false;
             }
-            let r = k.radius(p.h[a]).max(k.radius(p.h[b]));
-            dom.separation(&p.pos[a], &p.pos[b], code).norm_squared() < r * r
+            let ((xa, _, ra), (xb, vb, rb)) = (&kin[a], &kin[b]);
+            let reach = ra.max(*rb);
+            let dx = dom.separation(xa, xb, code);
+            let r2 = dx.norm_squared();
+            if r2 >= reach * reach {
+                return false;
+            }
+            let pair = Pair {
+                b,
+                code,
+                dx,
+                r: r2.sqrt(),
+                vb: dom.image_velocity(vb, code),
+                index: usize::MAX,
+            };
+            visit(sys, a, acc, &pair);
+            true
         });
+        self.neighbours = list;
         self.stats.seconds_neighbours += t0.elapsed().as_secs_f64();
     }
 

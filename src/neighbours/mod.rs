@@ -405,6 +405,19 @@ impl NeighbourList {
         })
     }
 
+    /// [`Self::filtered`] with a per-row accumulator: `keep(a, &mut acc[a], entry)` decides
+    /// and may accumulate what it measured on the kept entries, so a pass over the kept pairs
+    /// can ride on the cut instead of walking the lists again.
+    pub fn filtered_with<T: Send>(
+        &self,
+        acc: &mut [T],
+        keep: impl Fn(usize, &mut T, u32) -> bool + Sync,
+    ) -> Self {
+        Self::from_rows_with(acc, |a, t, out| {
+            out.extend(self.of(a).iter().copied().filter(|&e| keep(a, t, e)))
+        })
+    }
+
     /// The same lists after the particles were reordered so that new index i is old index
     /// `perm[i]` (rows moved, neighbour indices renamed, image codes kept).
     pub fn permuted(&self, perm: &[u32]) -> Self {
@@ -424,16 +437,27 @@ impl NeighbourList {
     /// Lists for n particles whose row a is written by `fill(a, out)` (appending to `out`),
     /// built in parallel chunks of rows and joined in order.
     fn from_rows(n: usize, fill: impl Fn(usize, &mut Vec<u32>) + Sync) -> Self {
+        Self::from_rows_with(&mut vec![(); n], |a, _, out| fill(a, out))
+    }
+
+    /// [`Self::from_rows`] with one accumulator per row (`acc.len()` rows), handed to
+    /// `fill(a, &mut acc[a], out)`.
+    fn from_rows_with<T: Send>(
+        acc: &mut [T],
+        fill: impl Fn(usize, &mut T, &mut Vec<u32>) + Sync,
+    ) -> Self {
         const CHUNK: usize = 1024;
-        let parts: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(CHUNK))
-            .into_par_iter()
-            .map(|chunk| {
-                let (start, end) = (chunk * CHUNK, ((chunk + 1) * CHUNK).min(n));
-                let mut counts = Vec::with_capacity(end - start);
+        let n = acc.len();
+        let parts: Vec<(Vec<u32>, Vec<u32>)> = acc
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .map(|(chunk, rows)| {
+                let start = chunk * CHUNK;
+                let mut counts = Vec::with_capacity(rows.len());
                 let mut out = Vec::new();
-                for a in start..end {
+                for (i, t) in rows.iter_mut().enumerate() {
                     let before = out.len();
-                    fill(a, &mut out);
+                    fill(start + i, t, &mut out);
                     counts.push((out.len() - before) as u32);
                 }
                 (counts, out)

@@ -90,11 +90,17 @@ pub fn solve_density_and_h_weighted<const D: usize>(
 /// Make the working list valid for the current positions and h without solving for h (schemes
 /// that update h themselves): reuse the master list while it serves every h, else rebuild.
 pub fn update_lists<const D: usize>(sys: &mut System<D>) {
+    update_master_list(sys);
+    sys.compact_neighbours();
+}
+
+/// The master-list half of [`update_lists`]: valid for the current positions and h, the
+/// working list left to the caller.
+pub fn update_master_list<const D: usize>(sys: &mut System<D>) {
     let allowed = sys.prepare_master_list(SKIN, false);
     if sys.particles.h.iter().zip(&allowed).any(|(h, a)| h > a) {
         sys.prepare_master_list(SKIN, true);
     }
-    sys.compact_neighbours();
 }
 
 /// κ(h) = Σ X_b W_ab(h) and ∂κ/∂h over a's listed neighbours (+ self).

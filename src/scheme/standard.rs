@@ -14,7 +14,7 @@
 
 use super::{smoothing, Scheme, SchemeError};
 use crate::particles::Vector;
-use crate::system::System;
+use crate::system::{Pair, System};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -242,22 +242,32 @@ impl<const D: usize> Scheme<D> for StandardSph {
 
     fn evaluate(&mut self, sys: &mut System<D>) -> Result<(), SchemeError> {
         match self.params.density {
-            DensityMode::Summation => smoothing::solve_density_and_h(sys),
-            DensityMode::Continuity => continuity_state(sys),
+            DensityMode::Summation => smoothing::solve_density_and_h_weighted(sys, None, false),
+            DensityMode::Continuity => continuity_h(sys),
         }
-        sys.update_eos();
         match &self.cullen {
             // the Balsara factor stays 1: the switch limits shear itself
-            Some(cd) => cd.measure(sys),
-            None => velocity_gradients(sys, self.balsara_slot, self.params.balsara),
+            Some(cd) => {
+                sys.compact_neighbours();
+                sys.update_eos();
+                cd.measure(sys);
+            }
+            None => {
+                let grads = cut_lists_with_gradient_sums(sys);
+                sys.update_eos();
+                let t0 = std::time::Instant::now();
+                finish_gradients(sys, &grads, self.balsara_slot, self.params.balsara);
+                sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
+            }
         }
         force_pass(sys, &self.params, self.balsara_slot, self.form);
         Ok(())
     }
 }
 
-/// With an evolved ρ: h_a = η (m_a/ρ_a)^{1/D} (walls keep theirs), Ω = 1, valid lists.
-fn continuity_state<const D: usize>(sys: &mut System<D>) {
+/// With an evolved ρ: h_a = η (m_a/ρ_a)^{1/D} (walls keep theirs), Ω = 1, and a master list
+/// that serves every h (the working list is cut by the caller).
+fn continuity_h<const D: usize>(sys: &mut System<D>) {
     let (eta, h_max) = (sys.eta, sys.h_max);
     let p = &mut sys.particles;
     for i in 0..p.len() {
@@ -266,33 +276,45 @@ fn continuity_state<const D: usize>(sys: &mut System<D>) {
         }
         p.omega[i] = 1.0;
     }
-    smoothing::update_lists(sys);
+    smoothing::update_master_list(sys);
 }
 
 /// Velocity divergence and |curl| (SPH estimate with grad-h:
 /// ∂v^i/∂x^j = −1/(Ω_a ρ_a) Σ_b m_b v_ab^i ∂_j W_ab(h_a)), and the Balsara factor
-/// f = |∇·v| / (|∇·v| + |∇×v| + 10⁻⁴ c/h) into `extra_scalars[balsara_slot]` (1 when off or 1D).
-pub(crate) fn velocity_gradients<const D: usize>(
+/// f = |∇·v| / (|∇·v| + |∇×v| + 10⁻⁴ c/h) into `extra_scalars[balsara_slot]` (1 when off or 1D),
+/// in two parts: the pair sums, taken while the working list is cut, then the per-particle
+/// finish once the EOS has given c.
+/// Cut the working list from the master list with the velocity-gradient sums taken on the
+/// way: one walk over the pairs instead of two (a separate gather over the working list
+/// visits the same pairs in the same order, so the sums are the same to the bit). Their time
+/// counts as neighbour time. Finish with [`finish_gradients`] once the EOS has given c.
+fn cut_lists_with_gradient_sums<const D: usize>(sys: &mut System<D>) -> Vec<GradAcc<D>> {
+    let mut grads = vec![GradAcc::<D>::default(); sys.particles.len()];
+    sys.compact_neighbours_visiting(&mut grads, add_gradient_pair);
+    grads
+}
+
+/// Pair b's share of a's velocity-gradient sums Σ m_b v_ab·∇_a W_ab(h_a) and
+/// Σ m_b v_ab ⊗ ∇_a W_ab(h_a).
+#[inline(always)]
+fn add_gradient_pair<const D: usize>(sys: &System<D>, a: usize, g: &mut GradAcc<D>, pr: &Pair<D>) {
+    let p = &sys.particles;
+    let dwdr = sys.kernel.dwdr(pr.r, p.h[a]);
+    if pr.r > 0.0 && dwdr != 0.0 {
+        let gw = pr.dx * (dwdr / pr.r);
+        let vab = p.vel[a] - pr.vb;
+        g.div += p.mass[pr.b] * vab.dot(&gw);
+        g.grad += p.mass[pr.b] * vab * gw.transpose();
+    }
+}
+
+/// ∇·v, |∇×v| and the Balsara factor from the pair sums.
+fn finish_gradients<const D: usize>(
     sys: &mut System<D>,
+    grads: &[GradAcc<D>],
     balsara_slot: usize,
     balsara: bool,
 ) {
-    let t0 = std::time::Instant::now();
-    let n = sys.particles.len();
-    let mut grads = vec![GradAcc::<D>::default(); n];
-    {
-        let p = &sys.particles;
-        let k = &sys.kernel;
-        sys.gather(&mut grads, |a, g, pr| {
-            let dwdr = k.dwdr(pr.r, p.h[a]);
-            if pr.r > 0.0 && dwdr != 0.0 {
-                let gw = pr.dx * (dwdr / pr.r);
-                let vab = p.vel[a] - pr.vb;
-                g.div += p.mass[pr.b] * vab.dot(&gw);
-                g.grad += p.mass[pr.b] * vab * gw.transpose();
-            }
-        });
-    }
     sys.stats.total_pairs += sys.neighbours.total_pairs() as u64;
     let use_balsara = balsara && D > 1;
     let p = &mut sys.particles;
@@ -314,7 +336,6 @@ pub(crate) fn velocity_gradients<const D: usize>(
                 1.0
             };
         });
-    sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
 }
 
 /// The pressure part of the pair force: the one place where standard SPH and rpSPH differ.
@@ -425,9 +446,12 @@ pub(crate) fn force_pass<const D: usize>(
                 let vsig = ra.c + rb.c - 3.0 * w.min(0.0);
                 o.vsig = o.vsig.max(vsig);
                 let rho_bar = 0.5 * (ra.rho + rb.rho);
-                if w < 0.0 {
+                // Viscosity on approaching pairs only, without a branch: w < 0 holds for
+                // about half the pairs at random, and a mispredicted branch cost more than
+                // the arithmetic; receding pairs get μ = 0, so Π = 0 and nothing is added.
+                {
                     let hbar = 0.5 * (ra.h + rb.h);
-                    let mu = hbar * w * pr.r / (pr.r * pr.r + prm.epsilon * hbar * hbar);
+                    let mu = hbar * w.min(0.0) * pr.r / (pr.r * pr.r + prm.epsilon * hbar * hbar);
                     let alpha = 0.5 * (ra.alpha + rb.alpha);
                     let fbal = 0.5 * (ra.bal + rb.bal);
                     let beta = if prm.cullen_dehnen {
