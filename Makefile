@@ -67,11 +67,17 @@ test-import: fmu libclang
 libclang:
 	tools/ensure_libclang.sh
 
-# Throughput table (particle-updates/s, pair interactions/s), 2D and 3D periodic boxes; then
-# live coupling on loopback: round trips with the zenoh node, publishing's cost per doStep.
+# Throughput table (particle-updates/s, pair interactions/s, the force loop's own rate and
+# the neighbour share), 2D and 3D periodic boxes; live coupling on loopback (round trips with
+# the zenoh node, publishing's cost per doStep); the side-by-side with PySPH (bench-peer); then
+# every performance goal with its figure, baseline, target and pass/short
+# (tools/bench_goals.py -> target/bench-goals.md). About 25 minutes on 2 cores, plus PySPH's
+# install the first time.
 bench: build fmu venv
 	$(BIN) bench --sizes 10000,100000,1000000 --dims 2,3 --steps 5 --json target/bench.json
 	$(VPY) tools/bench_zenoh.py --json target/bench-zenoh.json
+	tools/bench_peer.sh
+	$(VPY) tools/bench_goals.py
 
 # Side-by-side with PySPH on the 2D Noh problem (installs PySPH into target/peer-venv).
 bench-peer: build

@@ -18,6 +18,11 @@ pub struct BenchRow {
     pub particle_updates_per_second: f64,
     pub force_pairs_per_second: f64,
     pub all_pairs_per_second: f64,
+    /// Force-pass pairs per second of force-pass time per thread: the force loop's own rate.
+    pub force_loop_pairs_per_second_per_thread: f64,
+    /// Share of the step spent on neighbour upkeep (list builds, validity checks, the cut of
+    /// the working list with the gradient sums that ride on it).
+    pub neighbour_share: f64,
 }
 
 /// Case text for an N-particle periodic box in dimension d.
@@ -80,6 +85,7 @@ pub fn run_one<const D: usize>(n: usize, steps: u64, kernel: &str) -> Result<Ben
         sim.sys.particles.len(), st.seconds_neighbours, st.seconds_density, st.h_iterations, st.seconds_gradients, st.seconds_forces, secs
     );
     let np = sim.sys.particles.len();
+    let threads = rayon::current_num_threads();
     Ok(BenchRow {
         dimension: D,
         particles: np,
@@ -87,10 +93,14 @@ pub fn run_one<const D: usize>(n: usize, steps: u64, kernel: &str) -> Result<Ben
         neighbours: sim.sys.stats.force_pairs as f64 / np as f64,
         steps,
         seconds: secs,
-        threads: rayon::current_num_threads(),
+        threads,
         particle_updates_per_second: np as f64 * steps as f64 / secs,
         force_pairs_per_second: force_pairs as f64 / secs,
         all_pairs_per_second: all_pairs as f64 / secs,
+        force_loop_pairs_per_second_per_thread: force_pairs as f64
+            / st.seconds_forces.max(1e-12)
+            / threads as f64,
+        neighbour_share: st.seconds_neighbours / secs,
     })
 }
 
@@ -121,11 +131,11 @@ pub fn run_table(
 
 pub fn format_table(rows: &[BenchRow]) -> String {
     let mut s = String::from(
-        "| dim | particles | kernel | neighbours | threads | steps | particle-updates/s | force pairs/s | all pairs/s |\n|---|---|---|---|---|---|---|---|---|\n",
+        "| dim | particles | kernel | neighbours | threads | steps | particle-updates/s | force pairs/s | all pairs/s | force loop pairs/s/thread | neighbour share |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         s.push_str(&format!(
-            "| {}D | {} | {} | {:.1} | {} | {} | {:.3e} | {:.3e} | {:.3e} |\n",
+            "| {}D | {} | {} | {:.1} | {} | {} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.0} % |\n",
             r.dimension,
             r.particles,
             r.kernel,
@@ -134,7 +144,9 @@ pub fn format_table(rows: &[BenchRow]) -> String {
             r.steps,
             r.particle_updates_per_second,
             r.force_pairs_per_second,
-            r.all_pairs_per_second
+            r.all_pairs_per_second,
+            r.force_loop_pairs_per_second_per_thread,
+            100.0 * r.neighbour_share
         ));
     }
     s

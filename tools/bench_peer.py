@@ -53,9 +53,25 @@ def run_pysph(scheme, threads, outdir):
             "l1_rho": noh_l1(fluid.x, fluid.y, fluid.rho)}
 
 
-def run_sphfmu(threads, outdir):
+def scheme_case(scheme, path):
+    """models/noh2d.toml with `scheme` and that preset's own kernel, eta, integrator and CFL
+    (the [kernel] table and the integrator/cfl keys dropped), as each PySPH scheme runs
+    with its own: scheme against scheme."""
+    text = open(os.path.join(ROOT, "models", "noh2d.toml")).read()
+    text = re.sub(r"\[kernel\]\nname = .*\neta = .*\n", "", text)
+    text = re.sub(r"\[scheme\]\n(.*\n)*?\n", f'[scheme]\nname = "{scheme}"\n\n', text, count=1)
+    text = re.sub(r"integrator = .*\n|cfl = .*\n", "", text)
+    text = text.replace('name = "noh2d"', f'name = "noh2d-{scheme}"')
+    open(path, "w").write(text)
+    return path
+
+
+def run_sphfmu(threads, outdir, scheme="standard"):
     exe = os.path.join(ROOT, "target", "release", "sphfmu")
-    r = subprocess.run([exe, "run", os.path.join(ROOT, "models", "noh2d.toml"), "--out", outdir,
+    case = os.path.join(ROOT, "models", "noh2d.toml")
+    if scheme != "standard":
+        case = scheme_case(scheme, outdir + ".toml")
+    r = subprocess.run([exe, "run", case, "--out", outdir,
                         "--quiet", "--threads", str(threads)], check=True, capture_output=True, text=True)
     s = json.load(open(os.path.join(outdir, "summary.json")))
     final = sorted(glob.glob(os.path.join(outdir, "snapshot_*.csv")))[-1]
@@ -65,7 +81,7 @@ def run_sphfmu(threads, outdir):
     x = np.array([float(q["x"]) for q in rows])
     y = np.array([float(q["y"]) for q in rows])
     rho = np.array([float(q["rho"]) for q in rows])
-    return {"code": "sphfmu", "scheme": "standard", "threads": threads, "particles": s["particles"],
+    return {"code": "sphfmu", "scheme": scheme, "threads": threads, "particles": s["particles"],
             "steps": s["steps"], "seconds": s["wall_seconds"],
             "updates_per_s": s["particle_updates_per_second"], "l1_rho": noh_l1(x, y, rho)}
 
@@ -80,14 +96,19 @@ def main():
         ours = run_sphfmu(args.threads, os.path.join(tmp, "sphfmu"))
         rows.append(ours)
         for scheme in args.schemes.split(","):
+            # ours with the same scheme, then PySPH's, back to back
+            rows.append(run_sphfmu(args.threads, os.path.join(tmp, "sphfmu-" + scheme), scheme))
             rows.append(run_pysph(scheme, args.threads, os.path.join(tmp, scheme)))
     print(f"Noh 2D, 100^2 particles, t = {T_END}, {args.threads} thread(s), one run (tools/bench_peer.sh)")
-    print("| code | scheme | particles | steps | seconds | particle-updates/s | sphfmu / this | L1(rho), r < 0.5 |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| code | scheme | particles | steps | seconds | particle-updates/s | sphfmu standard / this | sphfmu same scheme / this | L1(rho), r < 0.5 |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    same = {r["scheme"]: r for r in rows if r["code"] == "sphfmu"}
     for r in rows:
         ratio = ours["updates_per_s"] / r["updates_per_s"]
+        r["standard_ratio"] = ratio
+        r["same_scheme_ratio"] = same[r["scheme"]]["updates_per_s"] / r["updates_per_s"]
         print(f"| {r['code']} | {r['scheme']} | {r['particles']} | {r['steps']} | {r['seconds']:.2f} | "
-              f"{r['updates_per_s']:.3e} | {ratio:.1f}x | {r['l1_rho']:.3f} |")
+              f"{r['updates_per_s']:.3e} | {ratio:.1f}x | {r['same_scheme_ratio']:.1f}x | {r['l1_rho']:.3f} |")
     out = os.path.join(ROOT, "target", "bench-peer.json")
     json.dump(rows, open(out, "w"), indent=2)
     print(f"(also written to {out})")

@@ -295,6 +295,17 @@ impl<const D: usize> DimKernel<D> {
         self.sigma * hd * hinv * self.kernel.shape(q).1
     }
 
+    /// σ/h^D from 1/h: the factor W(r, h) = σ/h^D · w(r/h) shares over all r.
+    #[inline(always)]
+    pub fn norm(&self, hinv: f64) -> f64 {
+        let hd = match D {
+            1 => hinv,
+            2 => hinv * hinv,
+            _ => hinv * hinv * hinv,
+        };
+        self.sigma * hd
+    }
+
     /// W(0, h): the self-contribution.
     #[inline(always)]
     pub fn w0(&self, h: f64) -> f64 {

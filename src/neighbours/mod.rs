@@ -413,7 +413,8 @@ impl NeighbourList {
         acc: &mut [T],
         keep: impl Fn(usize, &mut T, u32) -> bool + Sync,
     ) -> Self {
-        Self::from_rows_with(acc, |a, t, out| {
+        let bound = |start: usize, end: usize| self.offsets[end] - self.offsets[start];
+        Self::from_rows_with(acc, bound, |a, t, out| {
             out.extend(self.of(a).iter().copied().filter(|&e| keep(a, t, e)))
         })
     }
@@ -437,13 +438,15 @@ impl NeighbourList {
     /// Lists for n particles whose row a is written by `fill(a, out)` (appending to `out`),
     /// built in parallel chunks of rows and joined in order.
     fn from_rows(n: usize, fill: impl Fn(usize, &mut Vec<u32>) + Sync) -> Self {
-        Self::from_rows_with(&mut vec![(); n], |a, _, out| fill(a, out))
+        Self::from_rows_with(&mut vec![(); n], |_, _| 0, |a, _, out| fill(a, out))
     }
 
     /// [`Self::from_rows`] with one accumulator per row (`acc.len()` rows), handed to
-    /// `fill(a, &mut acc[a], out)`.
+    /// `fill(a, &mut acc[a], out)`; `bound(start, end)` is how many entries rows start..end
+    /// may hold at most (reserved at once rather than grown by doubling), 0 if unknown.
     fn from_rows_with<T: Send>(
         acc: &mut [T],
+        bound: impl Fn(usize, usize) -> usize + Sync,
         fill: impl Fn(usize, &mut T, &mut Vec<u32>) + Sync,
     ) -> Self {
         const CHUNK: usize = 1024;
@@ -454,7 +457,7 @@ impl NeighbourList {
             .map(|(chunk, rows)| {
                 let start = chunk * CHUNK;
                 let mut counts = Vec::with_capacity(rows.len());
-                let mut out = Vec::new();
+                let mut out = Vec::with_capacity(bound(start, start + rows.len()));
                 for (i, t) in rows.iter_mut().enumerate() {
                     let before = out.len();
                     fill(start + i, t, &mut out);

@@ -104,21 +104,36 @@ pub fn update_master_list<const D: usize>(sys: &mut System<D>) {
 }
 
 /// κ(h) = Σ X_b W_ab(h) and ∂κ/∂h over a's listed neighbours (+ self).
+///
+/// Written for the pair loop's cost (this is most of the h–ρ solve): with W = σ/h^D w(q) and
+/// ∂W/∂h = −σ/h^{D+1} [D w + q w'], the factors σ/h^D and 1/h are the same for every
+/// neighbour, so the loop sums only X_b w(q_b) and X_b [D w + q w'](q_b) with q = r·(1/h) (a
+/// multiply, not a division), and skips the listed entries beyond the support (the skin
+/// and the scatter neighbours) before taking a square root.
 #[inline]
 fn kappa_at<const D: usize>(sys: &System<D>, x: &[f64], a: usize, h: f64) -> (f64, f64) {
+    use crate::kernel::Kernel;
     let p = &sys.particles;
     let k = &sys.kernel;
-    let mut kappa = x[a] * k.w0(h);
-    let mut dkappa_dh = x[a] * k.dwdh0(h);
+    let hinv = 1.0 / h;
+    let support2 = (crate::kernel::SUPPORT * h) * (crate::kernel::SUPPORT * h);
+    let dim = D as f64;
+    let (w0, _) = k.kernel.shape(0.0);
+    let mut sum_w = x[a] * w0;
+    let mut sum_h = x[a] * dim * w0;
     let xa = p.pos[a];
     for &e in sys.verlet.list.of(a) {
         let (b, code) = unpack(e);
-        let r = sys.domain.separation(&xa, &p.pos[b], code).norm();
-        let ev = k.eval(r, h);
-        kappa += x[b] * ev.w;
-        dkappa_dh += x[b] * ev.dwdh;
+        let r2 = sys.domain.separation(&xa, &p.pos[b], code).norm_squared();
+        if r2 < support2 {
+            let q = r2.sqrt() * hinv;
+            let (w, dw) = k.kernel.shape(q);
+            sum_w += x[b] * w;
+            sum_h += x[b] * (dim * w + q * dw);
+        }
     }
-    (kappa, dkappa_dh)
+    let norm = k.norm(hinv);
+    (norm * sum_w, -norm * hinv * sum_h)
 }
 
 /// Solve particle a's h; `h_reach` is the largest h its listed neighbours serve exactly.

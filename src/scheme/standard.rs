@@ -147,13 +147,16 @@ struct GradAcc<const D: usize> {
     div: f64,
     /// Σ m_b v_ab ⊗ ∇W, the velocity-gradient sum (curl from its antisymmetric part).
     grad: nalgebra::SMatrix<f64, D, D>,
+    /// 1/h_a, set before the pair loop (no division per pair).
+    hinv: f64,
 }
 
-impl<const D: usize> Default for GradAcc<D> {
-    fn default() -> Self {
+impl<const D: usize> GradAcc<D> {
+    fn new(h: f64) -> Self {
         Self {
             div: 0.0,
             grad: nalgebra::SMatrix::zeros(),
+            hinv: 1.0 / h,
         }
     }
 }
@@ -289,7 +292,12 @@ fn continuity_h<const D: usize>(sys: &mut System<D>) {
 /// visits the same pairs in the same order, so the sums are the same to the bit). Their time
 /// counts as neighbour time. Finish with [`finish_gradients`] once the EOS has given c.
 fn cut_lists_with_gradient_sums<const D: usize>(sys: &mut System<D>) -> Vec<GradAcc<D>> {
-    let mut grads = vec![GradAcc::<D>::default(); sys.particles.len()];
+    let mut grads: Vec<GradAcc<D>> = sys
+        .particles
+        .h
+        .par_iter()
+        .map(|&h| GradAcc::new(h))
+        .collect();
     sys.compact_neighbours_visiting(&mut grads, add_gradient_pair);
     grads
 }
@@ -299,7 +307,7 @@ fn cut_lists_with_gradient_sums<const D: usize>(sys: &mut System<D>) -> Vec<Grad
 #[inline(always)]
 fn add_gradient_pair<const D: usize>(sys: &System<D>, a: usize, g: &mut GradAcc<D>, pr: &Pair<D>) {
     let p = &sys.particles;
-    let dwdr = sys.kernel.dwdr(pr.r, p.h[a]);
+    let dwdr = sys.kernel.dwdr_hinv(pr.r, g.hinv);
     if pr.r > 0.0 && dwdr != 0.0 {
         let gw = pr.dx * (dwdr / pr.r);
         let vab = p.vel[a] - pr.vb;
