@@ -1,5 +1,5 @@
 """tools/bench_goals.py, the verdicts of `make bench`: figures and ratios computed from the
-measurement files as written, pass and short decided against each target, and the Noh cases
+measurement files as written, pass and short decided against each target, and the box cases
 it builds for the cost comparison accepted by `sphfmu check`."""
 import json
 import subprocess
@@ -48,7 +48,7 @@ def test_cost_cases_are_valid_cases(sphfmu_bin, tmp_path):
     for scheme in ("crksph", "rosswog-f1"):
         kernel, eta, integrator, cfl = presets[scheme]
         for name in ("standard", scheme):
-            case = bench_goals.noh_case(str(tmp_path / f"{scheme}-{name}.toml"), name, kernel, eta,
+            case = bench_goals.box_case(str(tmp_path / f"{scheme}-{name}.toml"), name, kernel, eta,
                                         integrator, cfl)
             text = open(case).read()
             assert f'name = "{name}"' in text and f'name = "{kernel}"' in text
