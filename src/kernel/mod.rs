@@ -287,12 +287,7 @@ impl<const D: usize> DimKernel<D> {
         if q >= SUPPORT {
             return 0.0;
         }
-        let hd = match D {
-            1 => hinv,
-            2 => hinv * hinv,
-            _ => hinv * hinv * hinv,
-        };
-        self.sigma * hd * hinv * self.kernel.shape(q).1
+        self.norm(hinv) * hinv * self.kernel.shape(q).1
     }
 
     /// σ/h^D from 1/h: the factor W(r, h) = σ/h^D · w(r/h) shares over all r.

@@ -397,17 +397,10 @@ impl NeighbourList {
         })
     }
 
-    /// A copy holding only the entries for which `keep(a, entry)` holds (used to drop the
-    /// skin once smoothing lengths have converged). Chunked in parallel.
-    pub fn filtered(&self, keep: impl Fn(usize, u32) -> bool + Sync) -> Self {
-        Self::from_rows(self.offsets.len() - 1, |a, out| {
-            out.extend(self.of(a).iter().copied().filter(|&e| keep(a, e)))
-        })
-    }
-
-    /// [`Self::filtered`] with a per-row accumulator: `keep(a, &mut acc[a], entry)` decides
-    /// and may accumulate what it measured on the kept entries, so a pass over the kept pairs
-    /// can ride on the cut instead of walking the lists again.
+    /// A copy holding only the entries for which `keep(a, &mut acc[a], entry)` holds (used to
+    /// drop the skin once smoothing lengths have converged), chunked in parallel; `keep` may
+    /// accumulate what it measured on the kept entries into `acc[a]`, so a pass over the kept
+    /// pairs can ride on the cut instead of walking the lists again.
     pub fn filtered_with<T: Send>(
         &self,
         acc: &mut [T],
