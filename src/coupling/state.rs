@@ -27,8 +27,8 @@ use crate::system::{EvalStats, VerletList};
 use serde::{Deserialize, Serialize};
 
 const MAGIC: [u8; 8] = *b"sphfmu\0s";
-/// 3: the checksummed envelope.
-const VERSION: u32 = 3;
+/// 3: the checksummed envelope. 4: the cell grid keeps a width and a period per axis.
+const VERSION: u32 = 4;
 
 #[derive(Serialize, Deserialize)]
 struct Header {

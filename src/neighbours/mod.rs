@@ -29,11 +29,23 @@ pub fn unpack(entry: u32) -> (usize, ImageCode) {
 }
 
 /// Uniform cell grid over the particles' bounding box (the domain on periodic axes).
+///
+/// On a periodic axis the cells tile the period exactly (width = period / cell count, so at
+/// least the nominal cell size): every particle of cell c lies in
+/// `[origin + c·width, origin + (c+1)·width)`, and the image of a cell reached across the
+/// period is that cell shifted by one period. The search can then hand out whole cells with
+/// one shift each instead of taking the minimum image of every candidate.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct CellGrid<const D: usize> {
     #[serde(with = "crate::coupling::state::const_array")]
     origin: [f64; D],
-    cell: f64,
+    /// Cell width per axis.
+    #[serde(with = "crate::coupling::state::const_array")]
+    width: [f64; D],
+    /// Period per axis (hi − lo of the domain, exactly as `Domain::separation` takes it; 0
+    /// on other axes).
+    #[serde(with = "crate::coupling::state::const_array")]
+    period: [f64; D],
     #[serde(with = "crate::coupling::state::const_array")]
     dims: [usize; D],
     #[serde(with = "crate::coupling::state::const_array")]
@@ -48,7 +60,8 @@ impl<const D: usize> Default for CellGrid<D> {
     fn default() -> Self {
         Self {
             origin: [0.0; D],
-            cell: 1.0,
+            width: [1.0; D],
+            period: [0.0; D],
             dims: [1; D],
             periodic: [false; D],
             sorted: vec![],
@@ -104,16 +117,22 @@ impl<const D: usize> CellGrid<D> {
             cell *= 1.25;
         }
         let mut dims = [1usize; D];
+        let mut width = [cell; D];
+        let mut period = [0.0; D];
         for k in 0..D {
-            // Periodic: an integer number of cells exactly tiling the period, each ≥ cell.
-            dims[k] = ((hi[k] - lo[k]) / cell).floor().max(1.0) as usize;
-            if !periodic[k] {
+            if periodic[k] {
+                period[k] = hi[k] - lo[k];
+                // An integer number of cells exactly tiling the period, each ≥ cell.
+                dims[k] = ((hi[k] - lo[k]) / cell).floor().max(1.0) as usize;
+                width[k] = (hi[k] - lo[k]) / dims[k] as f64;
+            } else {
                 dims[k] = (((hi[k] - lo[k]) / cell).floor() as usize + 1).max(1);
             }
         }
         let mut grid = Self {
             origin: lo,
-            cell,
+            width,
+            period,
             dims,
             periodic,
             sorted: Vec::new(),
@@ -139,64 +158,94 @@ impl<const D: usize> CellGrid<D> {
         grid
     }
 
+    /// x relative to the grid's origin, brought into [0, period) on periodic axes (positions
+    /// between drifts may lie outside the box). Cells, candidates and queries all use these
+    /// coordinates, so a particle lies in the cell it is filed under, and a pair's two
+    /// searches compute the same separation with opposite signs.
     #[inline(always)]
-    fn coord(&self, x: &Vector<D>, k: usize) -> isize {
-        let c = ((x[k] - self.origin[k]) / self.cell).floor() as isize;
-        if self.periodic[k] {
-            c.rem_euclid(self.dims[k] as isize)
-        } else {
-            c.clamp(0, self.dims[k] as isize - 1)
-        }
+    pub fn local(&self, x: &Vector<D>) -> [f64; D] {
+        std::array::from_fn(|k| {
+            let mut y = x[k] - self.origin[k];
+            if self.periodic[k] {
+                let l = self.period[k];
+                y -= l * (y / l).floor();
+                // rounding may land on the period itself, or a NaN guard: file it at 0
+                if !(0.0..l).contains(&y) {
+                    y = 0.0;
+                }
+            }
+            y
+        })
     }
 
     fn cell_of(&self, x: &Vector<D>) -> usize {
+        let y = self.local(x);
         let mut c = 0usize;
         for k in (0..D).rev() {
-            c = c * self.dims[k] + self.coord(x, k) as usize;
+            let ck = ((y[k] / self.width[k]).floor() as isize).clamp(0, self.dims[k] as isize - 1);
+            c = c * self.dims[k] + ck as usize;
         }
         c
     }
 
-    /// Visit every particle in cells that can hold points within `reach` of `x`. The stencil
-    /// spans ⌈reach/cell⌉ cells each way, pruned to cells the search sphere touches; each
-    /// candidate is visited once (small periodic grids wrap onto a cell only once).
+    /// Visit every cell that can hold points within `reach` of the point with local
+    /// coordinates `y` (see [`Self::local`]), as `f(start, end, shift)`: positions
+    /// `start..end` of [`Self::sorted`] hold the cell's particles, and `shift` is the period
+    /// on the axes where the cell was reached across it (with its sign, 0 elsewhere), so
+    /// `(y − y_b) − shift` is the separation from the image of b near y. Taken in that order
+    /// it is exactly the negative of the separation b finds for y (a pair's two searches
+    /// agree on whether it is in range).
+    /// The stencil spans ⌈reach/width⌉ cells each way, pruned to cells the search sphere
+    /// touches; each cell is visited once (small periodic grids wrap onto a cell only once,
+    /// through its nearest image).
     #[inline]
-    pub fn for_candidates(&self, x: &Vector<D>, reach: f64, mut f: impl FnMut(usize)) {
+    pub fn for_cells(&self, y: &[f64; D], reach: f64, mut f: impl FnMut(usize, usize, &[f64; D])) {
         const MAXS: usize = 2 * MAX_SPAN + 1;
         let mut ranges: [[u32; MAXS]; D] = [[0; MAXS]; D];
         // squared distance from x to the slab of each candidate cell along each axis
         let mut gaps: [[f64; MAXS]; D] = [[0.0; MAXS]; D];
+        // the period to subtract from x − x_b for each candidate cell's image
+        let mut shifts: [[f64; MAXS]; D] = [[0.0; MAXS]; D];
         let mut counts = [0usize; D];
         let r2 = reach * reach;
-        let span = ((reach / self.cell).ceil() as isize).min(MAX_SPAN as isize);
         for k in 0..D {
-            let fc = (x[k] - self.origin[k]) / self.cell;
+            let w = self.width[k];
+            let span = ((reach / w).ceil() as isize).min(MAX_SPAN as isize);
+            let fc = y[k] / w;
             let c = fc.floor() as isize;
-            let within = (fc - c as f64) * self.cell; // offset of x inside its cell
+            let within = (fc - c as f64) * w; // offset of x inside its cell
             let dk = self.dims[k] as isize;
             let mut m = 0;
             for off in -span..=span {
                 let gap = match off {
                     0 => 0.0,
-                    o if o < 0 => within + (-o - 1) as f64 * self.cell,
-                    o => o as f64 * self.cell - within,
+                    o if o < 0 => within + (-o - 1) as f64 * w,
+                    o => o as f64 * w - within,
                 };
                 if gap * gap >= r2 {
                     continue;
                 }
                 let mut ci = c + off;
+                let mut shift = 0.0;
                 if self.periodic[k] {
-                    ci = ci.rem_euclid(dk);
+                    // the cell's image at c + off is cell ci moved by `wraps` periods
+                    let wraps = ci.div_euclid(dk);
+                    ci -= wraps * dk;
+                    shift = wraps as f64 * self.period[k];
                 } else if ci < 0 || ci >= dk {
                     // Outside the grid: holds no particle (the grid spans them all).
                     continue;
                 }
                 let ci = ci as u32;
                 if let Some(j) = ranges[k][..m].iter().position(|&r| r == ci) {
-                    gaps[k][j] = gaps[k][j].min(gap * gap);
+                    if gap * gap < gaps[k][j] {
+                        gaps[k][j] = gap * gap;
+                        shifts[k][j] = shift;
+                    }
                 } else {
                     ranges[k][m] = ci;
                     gaps[k][m] = gap * gap;
+                    shifts[k][m] = shift;
                     m += 1;
                 }
             }
@@ -206,17 +255,19 @@ impl<const D: usize> CellGrid<D> {
             counts[k] = m;
         }
         let mut idx = [0usize; D];
+        let mut sh = [0.0; D];
         loop {
             let mut c = 0usize;
             let mut g2 = 0.0;
             for k in (0..D).rev() {
                 c = c * self.dims[k] + ranges[k][idx[k]] as usize;
                 g2 += gaps[k][idx[k]];
+                sh[k] = shifts[k][idx[k]];
             }
             if g2 < r2 {
                 let (s, e) = (self.cell_start[c] as usize, self.cell_start[c + 1] as usize);
-                for &j in &self.sorted[s..e] {
-                    f(j as usize);
+                if s < e {
+                    f(s, e, &sh);
                 }
             }
             let mut k = 0;
@@ -240,7 +291,8 @@ impl<const D: usize> CellGrid<D> {
     /// particles: finite geometry, a cell table matching its dimensions, and `sorted` a
     /// permutation of the particles (or the empty grid of a state whose lists were reset).
     pub fn check(&self, n: usize) -> Result<(), String> {
-        if !(self.cell.is_finite() && self.cell > 0.0) || self.origin.iter().any(|x| !x.is_finite())
+        if self.width.iter().any(|w| !(w.is_finite() && *w > 0.0))
+            || self.origin.iter().any(|x| !x.is_finite())
         {
             return Err("cell grid: non-finite or non-positive geometry".into());
         }
@@ -335,6 +387,17 @@ impl NeighbourList {
     ) -> Self {
         let n = pos.len();
         const CHUNK: usize = 512;
+        // What the search reads of a candidate, in cell order: position and squared reach,
+        // so a cell's candidates are one contiguous run of memory.
+        let cand: Vec<([f64; D], f64)> = grid
+            .sorted
+            .par_iter()
+            .map(|&j| {
+                let j = j as usize;
+                (grid.local(&pos[j]), reach[j] * reach[j])
+            })
+            .collect();
+        let sorted = &grid.sorted;
         // (counts, entries, reverse entries (target, packed source))
         type Part = (Vec<u32>, Vec<u32>, Vec<(u32, u32)>);
         let parts: Vec<Part> = (0..n.div_ceil(CHUNK))
@@ -353,17 +416,25 @@ impl NeighbourList {
                     let ra2 = ra * ra;
                     domain.image_codes(&xa, ra, &mut codes);
                     for &code in &codes {
-                        let q = domain.image_position(&xa, code);
-                        grid.for_candidates(&q, ra, |b| {
-                            if b == a && code == 0 {
-                                return;
-                            }
-                            let d2 = domain.separation(&xa, &pos[b], code).norm_squared();
-                            if d2 < ra2 {
-                                out.push(pack(b, code));
-                                // b's own search (radius r_b) will not find a: hand it over.
-                                if d2 >= reach[b] * reach[b] {
-                                    rev.push((b as u32, pack(a, code)));
+                        // |x_a − M(x_b)| = |M(x_a) − x_b| for a mirror M: search around M(x_a)
+                        let q = grid.local(&domain.image_position(&xa, code));
+                        grid.for_cells(&q, ra, |s, e, shift| {
+                            for (j, (xb, rb2)) in cand[s..e].iter().enumerate() {
+                                let mut d2 = 0.0;
+                                for k in 0..D {
+                                    let d = (q[k] - xb[k]) - shift[k];
+                                    d2 += d * d;
+                                }
+                                if d2 < ra2 {
+                                    let b = sorted[s + j] as usize;
+                                    if b == a && code == 0 {
+                                        continue;
+                                    }
+                                    out.push(pack(b, code));
+                                    // b's own search (radius r_b) will not find a: hand it over.
+                                    if d2 >= *rb2 {
+                                        rev.push((b as u32, pack(a, code)));
+                                    }
                                 }
                             }
                         });
@@ -373,28 +444,51 @@ impl NeighbourList {
                 (counts, out, rev)
             })
             .collect();
-        let mut rev: Vec<(u32, u32)> = Vec::new();
-        let mut gathered = Vec::with_capacity(parts.len());
-        for (c, o, r) in parts {
-            rev.extend_from_slice(&r);
-            gathered.push((c, o));
-        }
-        let list = Self::concat(n, gathered);
-        if rev.is_empty() {
-            return list;
-        }
+        // Handed-over entries by target (then entry: the order is the same on any thread count).
+        let mut rev: Vec<(u32, u32)> = parts.iter().flat_map(|p| p.2.iter().copied()).collect();
         rev.par_sort_unstable();
-        // Merge: each particle's gather entries followed by its handed-over entries.
-        Self::from_rows(n, |a, out| {
-            out.extend_from_slice(list.of(a));
-            let first = rev.partition_point(|&(t, _)| (t as usize) < a);
-            out.extend(
-                rev[first..]
-                    .iter()
-                    .take_while(|&&(t, _)| t as usize == a)
-                    .map(|&(_, e)| e),
-            );
-        })
+        // Row a: its gather entries, then the entries handed over to it, written once into
+        // the final array (chunk by chunk, in parallel).
+        let mut offsets = vec![0usize; n + 1];
+        for (chunk, part) in parts.iter().enumerate() {
+            for (i, &c) in part.0.iter().enumerate() {
+                offsets[chunk * CHUNK + i + 1] = c as usize;
+            }
+        }
+        for &(t, _) in &rev {
+            offsets[t as usize + 1] += 1;
+        }
+        for a in 0..n {
+            offsets[a + 1] += offsets[a];
+        }
+        let mut entries = vec![0u32; offsets[n]];
+        let mut slices = Vec::with_capacity(parts.len());
+        let mut rest = &mut entries[..];
+        for chunk in 0..parts.len() {
+            let (start, end) = (chunk * CHUNK, ((chunk + 1) * CHUNK).min(n));
+            let (slice, tail) = rest.split_at_mut(offsets[end] - offsets[start]);
+            slices.push(slice);
+            rest = tail;
+        }
+        parts
+            .par_iter()
+            .zip(slices)
+            .enumerate()
+            .for_each(|(chunk, ((counts, out, _), slice))| {
+                let start = chunk * CHUNK;
+                let mut next = rev.partition_point(|&(t, _)| (t as usize) < start);
+                let (mut src, mut dst) = (0, 0);
+                for (i, &c) in counts.iter().enumerate() {
+                    let c = c as usize;
+                    slice[dst..dst + c].copy_from_slice(&out[src..src + c]);
+                    (src, dst) = (src + c, dst + c);
+                    while next < rev.len() && rev[next].0 as usize == start + i {
+                        slice[dst] = rev[next].1;
+                        (next, dst) = (next + 1, dst + 1);
+                    }
+                }
+            });
+        Self { offsets, entries }
     }
 
     /// A copy holding only the entries for which `keep(a, &mut acc[a], entry)` holds (used to

@@ -129,6 +129,9 @@ pub struct RunSummary {
     pub momentum_residual: Option<f64>,
     pub list_build_seconds: f64,
     pub neighbour_list_builds: u64,
+    /// The builds of `neighbour_list_builds` made within an h solve because a smoothing
+    /// length outgrew its listed reach (the rest: particles moved through the skin).
+    pub h_growth_rebuilds: u64,
 }
 
 /// Which external impulses act on the fluid, and so what its momentum change means.
@@ -377,6 +380,7 @@ fn run_dim<const D: usize>(
         momentum_residual: None,
         mean_h_iterations: sim.sys.stats.h_iterations_total / sim.sys.stats.h_solves.max(1) as f64,
         neighbour_list_builds: sim.sys.verlet.builds,
+        h_growth_rebuilds: sim.sys.stats.list_rebuilds,
     };
     if summary.momentum_check != MomentumCheck::Boundaries {
         let r: f64 = (0..3)
