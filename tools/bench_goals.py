@@ -69,8 +69,8 @@ def box_case(path, scheme, kernel, eta, integrator, cfl):
     """A 2D periodic box of 200^2 particles on a lattice perturbed by 10 % of the spacing
     (the throughput table's box, `sphfmu bench`), gas at rest, t = 0.3, with the given
     scheme, kernel, eta, integrator and CFL: the same case and neighbour number for both
-    sides of a cost ratio. (Rosswog F1 at its preset stops on the 2D Noh problem with a time
-    step collapse at step 3, so the comparison does not use Noh.)"""
+    sides of a cost ratio. (Chosen while Rosswog F1 at its preset still stopped on the 2D Noh
+    problem; a box at rest also keeps the step count the same on both sides.)"""
     text = f"""[case]
 name = "cost-{scheme}"
 dimension = 2
