@@ -133,7 +133,7 @@ fn cli_exit_code_2_with_one_line_for_bad_cases() {
         .output()
         .unwrap();
     assert_eq!(ok.status.code(), Some(0));
-    assert!(String::from_utf8_lossy(&ok.stdout).contains("720 particles"));
+    assert!(String::from_utf8_lossy(&ok.stdout).contains("721 particles"));
 }
 
 #[test]

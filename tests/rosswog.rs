@@ -127,12 +127,18 @@ fn sod_with_f1_rpsph_and_standard() {
         );
         rows.push(e.l1_density);
     }
-    // measured: standard 2.75e-3, F1 1.98e-3, rpSPH (symmetrised gradient) 4.40e-3
+    // measured: standard 1.84e-3, F1 1.96e-3, rpSPH (symmetrised gradient) 3.53e-3. While
+    // the lattices started dense by their kernel-sum error (0.18 % for M4 at η = 1.2, 1e-4
+    // for F1's C6 at η = 2.2) standard SPH gave 2.75e-3 and F1 looked 1.4x better; with
+    // initial conditions at the requested density the two are within 7 % on this 1D tube.
     assert!(
-        rows[1] < rows[0],
-        "F1 should beat standard SPH on Sod: {rows:?}"
+        rows[0] <= 2.0e-3 && rows[1] <= 2.2e-3 && rows[2] <= 3.9e-3,
+        "{rows:?}"
     );
-    assert!(rows[1] <= 2.2e-3 && rows[2] <= 4.8e-3, "{rows:?}");
+    assert!(
+        rows[1] < 1.15 * rows[0],
+        "F1 against standard SPH: {rows:?}"
+    );
 }
 
 #[test]

@@ -19,10 +19,13 @@ fn sod_1d_standard_sph_l1_density() {
         "Sod: N = {}, steps = {}, L1 rho {:.4e} v {:.4e} P {:.4e}",
         s.particles, s.steps, e.l1_density, e.l1_velocity, e.l1_pressure
     );
-    assert_eq!(s.particles, 720);
-    // Measured 2.75e-3; the bound is 3.0e-3 (PySPH tsph: 1.75e-3, adke 2.81e-3).
-    assert!(e.l1_density <= 3.0e-3, "L1(rho) = {}", e.l1_density);
-    assert!(e.l1_pressure <= 3.5e-3, "L1(P) = {}", e.l1_pressure);
+    // 721, not 720: the 1D M4 lattice sum at η = 1.2 is 1.76e-3 above 1/V, so the case's
+    // equal masses need that much closer spacing to sum to ρ (ics::lattice_density_factor)
+    assert_eq!(s.particles, 721);
+    // Measured 1.84e-3 (2.75e-3 while the lattice started 0.18 % dense); the bound
+    // was 3.0e-3 (PySPH tsph: 1.75e-3, adke 2.81e-3).
+    assert!(e.l1_density <= 2.2e-3, "L1(rho) = {}", e.l1_density);
+    assert!(e.l1_pressure <= 2.2e-3, "L1(P) = {}", e.l1_pressure);
     // Mirror walls do no work: total energy to integrator accuracy (measured 1.3e-6).
     let de = (s.last.total_energy - s.initial.total_energy).abs() / s.initial.total_energy;
     assert!(de < 1e-5, "energy drift {de}");
@@ -46,7 +49,7 @@ fn sod_1d_standard_sph_l1_density() {
 
 #[test]
 fn sod_table_of_every_scheme() {
-    // One Sod setup (models/sod.toml: 720 equal-mass particles, γ = 1.4, t = 0.15) for every
+    // One Sod setup (models/sod.toml: 721 equal-mass particles, γ = 1.4, t = 0.15) for every
     // preset, each with its own kernel and integrator (`Case::with_scheme`; the foundation's
     // standard SPH row keeps the case's conductivity, rpSPH and F1 their model files).
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("models");

@@ -36,8 +36,12 @@ pub struct Body<const D: usize> {
     pub force: Vector<D>,
     /// Torque about the moved reference point (2D: only z).
     pub torque: [f64; 3],
-    /// Volume of one wall particle (spacing^D): its mass is ρ_w times this.
+    /// Volume one wall particle stands for: spacing^D over the wall lattice's kernel-sum
+    /// factor when the scheme sums density (`case::ics::lattice_density_factor`), so the
+    /// fluid's sum sees the wall at the wall density. Its mass is ρ_w times this.
     pub particle_volume: f64,
+    /// Spacing of the wall lattice.
+    pub spacing: f64,
     /// Time integral of `force` and `torque` with the integrator's own stage weights, so the
     /// fluid's momentum change plus the impulse on every body is the gravity impulse to
     /// round-off.

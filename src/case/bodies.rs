@@ -73,13 +73,15 @@ impl BodyConfig {
 
 /// Add the wall particles of every body to `p` (after the fluid) and return the bodies.
 /// `spacing_of` holds each fluid particle's lattice spacing; `eta` sets h = η Δx and the
-/// wall thickness of one kernel support. A fluid particle inside a body is an error.
+/// wall thickness of one kernel support; `factor` is the wall lattice's kernel-sum factor
+/// (1 + ε, or 1 without a summed density). A fluid particle inside a body is an error.
 pub(super) fn add_bodies<const D: usize>(
     case: &Case,
     p: &mut Particles<D>,
     spacing_of: &[f64],
     eta: f64,
     origin: &Vector<D>,
+    factor: f64,
 ) -> Result<Vec<Body<D>>, CaseError> {
     let fluid = p.len();
     let finest = spacing_of.iter().cloned().fold(f64::INFINITY, f64::min);
@@ -116,7 +118,7 @@ pub(super) fn add_bodies<const D: usize>(
                 "{key}.shape: no wall particle fits (spacing {dx}); the shape is thinner than the lattice"
             )));
         }
-        let mass = rho * dx.powi(D as i32);
+        let mass = rho * dx.powi(D as i32) / factor;
         for x in pts {
             p.push(mass, x, Vector::zeros(), u, rho, h, 1000 + bi as u16);
             let last = p.len() - 1;
@@ -141,7 +143,8 @@ pub(super) fn add_bodies<const D: usize>(
             pose: Pose::default(),
             force: Vector::zeros(),
             torque: [0.0; 3],
-            particle_volume: dx.powi(D as i32),
+            particle_volume: dx.powi(D as i32) / factor,
+            spacing: dx,
             impulse: Vector::zeros(),
             angular_impulse: [0.0; 3],
             held: Default::default(),

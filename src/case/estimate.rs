@@ -88,14 +88,29 @@ impl Case {
         match (r.spacing, r.particle_mass) {
             (Some(s), _) => s,
             (_, Some(m)) => {
-                let unit = match (r.lattice, d) {
-                    (_, 1) | (Lattice::Cubic, _) => 1.0,
-                    (Lattice::Hexagonal, 2) => 0.5 * 3f64.sqrt(),
-                    (Lattice::Hexagonal, _) => 1.0 / 2f64.sqrt(),
-                };
-                (m / (r.density * unit)).powf(1.0 / d as f64)
+                // as ics::generate_particles: the volume holding m at the summed density
+                let unit = super::ics::volume_per_particle(r.lattice, d, 1.0);
+                (m / (r.density * self.density_factor(r.lattice) * unit)).powf(1.0 / d as f64)
             }
             _ => f64::NAN,
+        }
+    }
+
+    /// The lattice's kernel-sum factor 1 + ε that `ics::generate_particles` applies (1 when
+    /// it applies none, or when the kernel or η is invalid: validation reports those).
+    fn density_factor(&self, lattice: Lattice) -> f64 {
+        use super::ics::lattice_density_factor;
+        use crate::kernel::DimKernel;
+        if !self.corrects_lattice_density() || self.glass.is_some() {
+            return 1.0;
+        }
+        let (Ok(kernel), Ok(eta)) = (self.kernel(), self.eta()) else {
+            return 1.0;
+        };
+        match self.case.dimension {
+            1 => lattice_density_factor::<1>(lattice, &DimKernel::new(kernel), eta),
+            2 => lattice_density_factor::<2>(lattice, &DimKernel::new(kernel), eta),
+            _ => lattice_density_factor::<3>(lattice, &DimKernel::new(kernel), eta),
         }
     }
 

@@ -26,7 +26,7 @@ impl SplitMix64 {
 }
 
 /// Volume per particle of a lattice with nearest-neighbour spacing a.
-fn volume_per_particle(lattice: Lattice, d: usize, a: f64) -> f64 {
+pub(super) fn volume_per_particle(lattice: Lattice, d: usize, a: f64) -> f64 {
     match (lattice, d) {
         (_, 1) | (Lattice::Cubic, _) => a.powi(d as i32),
         (Lattice::Hexagonal, 2) => 0.5 * 3f64.sqrt() * a * a,
@@ -105,6 +105,55 @@ fn lattice_points<const D: usize>(
     }
     let vol = if D == 3 { sx * sy * sz } else { sx * sy };
     (pts, vol)
+}
+
+/// The kernel-sum density of an ideal lattice over the density its volume per particle V
+/// implies, 1 + ε = V Σ_b W(r_ab, h), at the h where the summation density's h–ρ relation
+/// settles: h = η (m/ρ)^{1/D} with ρ = m Σ_b W(r_ab, h).
+///
+/// A lattice's discrete sum is not exactly 1/V: measured ε = +0.18 % for the cubic spline
+/// at η = 1.2 on a square lattice, so a region filled at m = ρV started 0.18 % dense, which
+/// stalled the Sod convergence near L1(ρ) = 1.5e-3 and left the acoustic wave's raw error
+/// at 1,760× its amplitude (issue 20). ε is scale-free (h ∝ spacing), so it is computed once
+/// per lattice, kernel and η on a unit tile whose box is a whole number of lattice periods
+/// (no stretch), around the point nearest its centre.
+pub fn lattice_density_factor<const D: usize>(
+    lattice: Lattice,
+    kernel: &crate::kernel::DimKernel<D>,
+    eta: f64,
+) -> f64 {
+    // lattice periods per axis for spacing 1 (hexagonal: rows and layers in pairs)
+    let period: [f64; 3] = match (lattice, D) {
+        (_, 1) | (Lattice::Cubic, _) => [1.0; 3],
+        _ => [1.0, 3f64.sqrt(), 2.0 * (2.0f64 / 3.0).sqrt()],
+    };
+    let v = volume_per_particle(lattice, D, 1.0);
+    let h0 = eta * v.powf(1.0 / D as f64);
+    // room for the support at up to 1.5 h0 on every side of the centre point
+    let half = kernel.radius(1.5 * h0) + 2.0;
+    let mut hi = [0.0; D];
+    for k in 0..D {
+        hi[k] = (2.0 * half / period[k]).ceil() * period[k];
+    }
+    let (pts, vol) = lattice_points::<D>(lattice, &[0.0; D], &hi, 1.0);
+    let mid = Vector::<D>::from_fn(|k, _| 0.5 * hi[k]);
+    let centre = pts
+        .iter()
+        .min_by(|a, b| (*a - mid).norm().total_cmp(&(*b - mid).norm()))
+        .copied()
+        .unwrap_or(mid);
+    let dist: Vec<f64> = pts.iter().map(|x| (x - centre).norm()).collect();
+    let sum = |h: f64| dist.iter().map(|&r| kernel.w(r, h)).sum::<f64>();
+    let mut h = h0;
+    for _ in 0..200 {
+        let next = eta * (1.0 / sum(h)).powf(1.0 / D as f64);
+        let done = (next - h).abs() <= 1e-15 * h;
+        h = next;
+        if done {
+            break;
+        }
+    }
+    sum(h) * vol
 }
 
 fn inside<const D: usize>(case: &Case, r: &Region, x: &Vector<D>) -> bool {
@@ -189,10 +238,16 @@ fn state_of<const D: usize>(case: &Case, r: &Region, x: &Vector<D>) -> State<D> 
 }
 
 /// Fill the regions with particles and set their state; see the case-file reference.
+///
+/// With `kernel` given (the scheme's, see `Case::corrects_lattice_density`) each lattice region's masses
+/// are ρV/(1 + ε) (or, with `particle_mass`, its volume per particle m/(ρ(1 + ε))), so the
+/// sum gives the region's density ([`lattice_density_factor`]); not after a glass
+/// relaxation, whose sums are its own.
 pub fn generate_particles<const D: usize>(
     case: &Case,
     domain: &Domain<D>,
     eta: f64,
+    kernel: Option<&crate::kernel::DimKernel<D>>,
 ) -> Result<(Particles<D>, Vec<crate::boundary::bodies::Body<D>>), CaseError> {
     let mut p = Particles::<D>::default();
     let mut spacing_of = Vec::new();
@@ -205,17 +260,21 @@ pub fn generate_particles<const D: usize>(
                 hi[k] = hi[k].min(domain.hi[k]);
             }
         }
+        let factor = match kernel {
+            Some(k) if case.glass.is_none() => lattice_density_factor(r.lattice, k, eta),
+            _ => 1.0,
+        };
         let a = match (r.spacing, r.particle_mass) {
             (Some(s), _) => s,
             (_, Some(m)) => {
-                // spacing whose volume per particle holds mass m at density ρ
+                // spacing whose volume per particle holds mass m at density ρ (as summed)
                 let unit = volume_per_particle(r.lattice, D, 1.0);
-                (m / (r.density * unit)).powf(1.0 / D as f64)
+                (m / (r.density * factor * unit)).powf(1.0 / D as f64)
             }
             _ => unreachable!("validated"),
         };
         let (pts, vol) = lattice_points::<D>(r.lattice, &lo, &hi, a);
-        let mass = r.density * vol;
+        let mass = r.density * vol / factor;
         let h = eta * vol.powf(1.0 / D as f64);
         for x in pts {
             if region_at(case, &x) != Some(ri) {
@@ -223,7 +282,11 @@ pub fn generate_particles<const D: usize>(
             }
             let s = state_of(case, r, &x);
             // equal volumes: a hydrostatic region's masses follow its density
-            let m = if r.hydrostatic { s.rho * vol } else { mass };
+            let m = if r.hydrostatic {
+                s.rho * vol / factor
+            } else {
+                mass
+            };
             p.push(m, x, s.vel, s.u, s.rho, h, r.material);
             spacing_of.push(vol.powf(1.0 / D as f64));
         }
@@ -309,7 +372,9 @@ pub fn generate_particles<const D: usize>(
         // align the walls with the first region's lattice (cell centres from its lower corner)
         let lo0 = case.regions.first().map(|r| case.region_box(r).0);
         let origin = Vector::<D>::from_fn(|k, _| lo0.as_ref().map_or(domain.lo[k], |l| l[k]));
-        super::bodies::add_bodies(case, &mut p, &spacing_of, eta, &origin)?
+        // the walls are a cubic lattice at the body's spacing
+        let factor = kernel.map_or(1.0, |k| lattice_density_factor(Lattice::Cubic, k, eta));
+        super::bodies::add_bodies(case, &mut p, &spacing_of, eta, &origin, factor)?
     } else {
         Vec::new()
     };

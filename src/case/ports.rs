@@ -149,7 +149,7 @@ pub(super) fn add_ports<const D: usize>(
             .position(|b| b.name == cfg.body)
             .expect("validated: the port's body exists");
         let shape = &case.bodies[bi].shape;
-        let dx = bodies[bi].particle_volume.powf(1.0 / D as f64);
+        let dx = bodies[bi].spacing;
         let c = vector::<D>(&cfg.center);
         let phi = shape.distance(&c);
         if phi.abs() > 0.5 * dx {

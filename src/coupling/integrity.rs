@@ -206,9 +206,10 @@ pub(super) fn check<const D: usize>(s: &Saved<D>, c: &Coupled<D>) -> Result<(), 
         )?;
         if (b.axis.norm() - 1.0).abs() > 1e-9
             || !(b.particle_volume.is_finite() && b.particle_volume > 0.0)
+            || !(b.spacing.is_finite() && b.spacing > 0.0)
         {
             return Err(format!(
-                "{what}: axis not a unit vector or wall volume not > 0"
+                "{what}: axis not a unit vector, or wall volume or spacing not > 0"
             ));
         }
     }

@@ -134,6 +134,20 @@ impl SchemeConfig {
         }
     }
 
+    /// Whether the scheme takes its density (or volume) from a kernel sum at the smoothing
+    /// length of the h–ρ relation h = η V^{1/D} — every scheme but standard SPH and rpSPH with
+    /// continuity density. Their initial conditions must give that sum the density they ask
+    /// for (see `case::ics::lattice_density_factor`).
+    pub fn sums_density(&self) -> bool {
+        !matches!(
+            self,
+            SchemeConfig::Standard(standard::StandardParams {
+                density: standard::DensityMode::Continuity,
+                ..
+            })
+        )
+    }
+
     /// One of the CRKSPH paper's schemes (CRKSPH, compSPH, compSPH+Cullen, PSPH).
     fn crksph_paper(&self) -> bool {
         matches!(

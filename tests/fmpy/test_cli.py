@@ -56,7 +56,7 @@ def test_vtu_snapshots_open_in_meshio(sod_run):
     vtus = sorted(out.glob("snapshot_*.vtu"))
     assert len(vtus) == 4  # t = 0, 0.05, 0.10, 0.15
     m = meshio.read(vtus[-1])
-    assert m.points.shape == (720, 3)
+    assert m.points.shape == (721, 3)  # the lattice spacing that sums to the density asked for
     for field in ("density", "pressure", "velocity", "internal_energy", "smoothing_length", "mass"):
         assert field in m.point_data, field
     csvp = read_csv(sorted(out.glob("snapshot_*.csv"))[-1])
