@@ -188,7 +188,9 @@ def test_bad_calls_return_errors_with_a_log_line_and_the_process_survives():
 def test_a_blowup_is_an_error_and_restore_or_reset_recovers(fmi):
     r = session("blowup_and_reset", fmu_path=str(FMU3 if fmi == 3 else FMU2), fmi=fmi)
     assert r["blowup"] == 3 and r["step_after_failure"] == 3
-    assert any("the solver failed (unstable: non-finite" in m for m in r["log"]), r["log"]
+    # the blow-up shows as a non-finite field or a collapsed time step, depending on the
+    # last bits of the start (both are the solver's "unstable" failure)
+    assert any("the solver failed (unstable: " in m for m in r["log"]), r["log"]
     assert abs(r["after_restore"] - 0.2) < 0.01
     assert r["after_reset"] == r["fresh"], "reset must reproduce a fresh instance"
 
