@@ -121,9 +121,10 @@ impl<const D: usize> System<D> {
     /// |d_a − d_b| ≤ |d_a − u| + |d_b − u| ≤ e_a + E with e_a = |d_a − u| and E = max e: a
     /// pair closer than `max(R_a, R_b)` now, say R_a ≥ R_b, was closer than R_a + e_a + E at
     /// the build, so it is listed while `R_a + e_a + E ≤ Rb_a` for all a. u is the centre of
-    /// the displacements' bounding box (its components along reflecting axes zero): a flow that moves as a whole (a shock tube's plateau,
-    /// a sloshing tank) then uses the skin for its relative motion only, where u = 0 would
-    /// spend it twice on the common drift. The list is rebuilt (reach 2h(1+skin)) when
+    /// the displacements' bounding box (its components along reflecting axes zero): a flow
+    /// that moves as a whole then uses the skin for its relative motion only, where u = 0
+    /// would spend it twice on the common drift. (Flows moving both ways, like the two
+    /// shocks of a periodic Sod tube, keep u near 0 and gain nothing.) The list is rebuilt (reach 2h(1+skin)) when
     /// `rebuild` is set or no slack is left.
     pub fn prepare_master_list(&mut self, skin: f64, mut rebuild: bool) -> Vec<f64> {
         let t0 = std::time::Instant::now();
@@ -142,27 +143,11 @@ impl<const D: usize> System<D> {
                 .into_par_iter()
                 .map(|i| dom.separation(&pos[i], &v.pos[i], 0))
                 .collect();
+            let inf = Vector::<D>::repeat(f64::INFINITY);
             let (lo, hi) = moved
                 .par_iter()
-                .fold(
-                    || ([f64::INFINITY; D], [f64::NEG_INFINITY; D]),
-                    |(mut lo, mut hi), d| {
-                        for k in 0..D {
-                            lo[k] = lo[k].min(d[k]);
-                            hi[k] = hi[k].max(d[k]);
-                        }
-                        (lo, hi)
-                    },
-                )
-                .reduce(
-                    || ([f64::INFINITY; D], [f64::NEG_INFINITY; D]),
-                    |(a, b), (c, d)| {
-                        (
-                            std::array::from_fn(|k| a[k].min(c[k])),
-                            std::array::from_fn(|k| b[k].max(d[k])),
-                        )
-                    },
-                );
+                .map(|d| (*d, *d))
+                .reduce(|| (inf, -inf), |(a, b), (c, d)| (a.inf(&c), b.sup(&d)));
             // On a reflecting axis a mirror image moves with the normal component of d_b
             // reversed, so |M d_b − u| = |d_b − u| needs u's normal component to be zero.
             let u = Vector::<D>::from_fn(|k, _| {

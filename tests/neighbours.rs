@@ -173,26 +173,9 @@ seed = 3
 /// and the working list stays exact.
 #[test]
 fn uniform_drift_keeps_the_master_list() {
-    let text = r#"
-[case]
-name = "drift"
-dimension = 2
-[domain]
-min = [0.0, 0.0]
-max = [1.0, 1.0]
-boundary = ["periodic", "periodic"]
-[eos]
-type = "ideal-gas"
-gamma = 1.4
-[time]
-t_end = 1.0
-[[region]]
-spacing = 0.025
-density = 1.0
-pressure = 1.0
-velocity = [3.0, 2.0]
-"#;
-    let case = sphfmu::case::Case::parse(text).unwrap();
+    let text = common::header(2, 0.0, 1.0, "periodic", 1.4)
+        + "[time]\nt_end = 1.0\n[[region]]\nspacing = 0.025\ndensity = 1.0\npressure = 1.0\nvelocity = [3.0, 2.0]\n";
+    let case = sphfmu::case::Case::parse(&text).unwrap();
     let mut sim = case.build::<2>().unwrap();
     sim.step(f64::INFINITY).unwrap();
     let builds0 = sim.sys.verlet.builds;
