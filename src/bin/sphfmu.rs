@@ -85,11 +85,18 @@ enum Command {
         /// crksph, compsph, compsph-cullen, psph), with the preset's kernel and integrator
         #[arg(long)]
         scheme: Option<String>,
+        /// Change a key of the case file, e.g. --set time.t_end=0.1 --set 'region.*.spacing=0.005'
+        /// (a dotted path; * for every entry of an array of tables; the value in TOML syntax)
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
     },
     /// Validate a case file without running it: every key, and its size (particles and
     /// memory, estimated without allocating) against the machine and the case's [limits].
     Check {
         case: PathBuf,
+        /// Change a key of the case file first, as for `run`
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
         /// Also generate the particles and evaluate the initial state.
         #[arg(long)]
         build: bool,
@@ -273,7 +280,7 @@ fn main() -> ExitCode {
             }
             ExitCode::SUCCESS
         }
-        Command::Check { case, build } => match Case::load(&case) {
+        Command::Check { case, sets, build } => match Case::load_with(&case, &sets) {
             Ok(c) => {
                 if build {
                     let r = match c.dimension() {
@@ -309,11 +316,12 @@ fn main() -> ExitCode {
             quiet,
             threads,
             scheme,
+            sets,
         } => {
             if let Err(e) = set_threads(threads) {
                 return fail(2, e);
             }
-            let c = match Case::load(&case) {
+            let c = match Case::load_with(&case, &sets) {
                 Ok(c) => c,
                 Err(e) => return fail(2, e),
             };

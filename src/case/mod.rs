@@ -6,6 +6,7 @@ mod checks;
 mod estimate;
 mod glass;
 mod ics;
+mod overrides;
 mod ports;
 mod probes;
 mod sections;
@@ -114,6 +115,28 @@ impl Case {
         let text = std::fs::read_to_string(path)
             .map_err(|e| CaseError(format!("{}: cannot read: {e}", path.display())))?;
         Self::parse(&text).map_err(|e| CaseError(format!("{}: {}", path.display(), e.0)))
+    }
+
+    /// Read a case file, set `key=value` overrides in it (`--set`), then validate it. A key is
+    /// a dotted path into the file's tables (`time.t_end`, `region.0.spacing`); `*` in place of
+    /// an index sets every entry of an array of tables (`region.*.spacing`). The value is a TOML
+    /// value (`0.01`, `"crksph"`, `[1.0, 2.0]`). A key must already exist, unless its last
+    /// segment is new in an existing table, so that a typo cannot pass unnoticed as a new table.
+    pub fn load_with(path: &Path, sets: &[String]) -> Result<Case, CaseError> {
+        if sets.is_empty() {
+            return Self::load(path);
+        }
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| CaseError(format!("{}: cannot read: {e}", path.display())))?;
+        let at = |e: CaseError| CaseError(format!("{}: {}", path.display(), e.0));
+        let mut table: toml::Table =
+            toml::from_str(&text).map_err(|e| at(CaseError(one_line(e.message()))))?;
+        for s in sets {
+            overrides::apply(&mut table, s).map_err(at)?;
+        }
+        let text = toml::to_string(&table)
+            .map_err(|e| at(CaseError(format!("--set: cannot write the case back: {e}"))))?;
+        Self::parse(&text).map_err(|e| at(CaseError(format!("after --set: {}", e.0))))
     }
 
     /// Parse and validate TOML text.

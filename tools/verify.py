@@ -1,0 +1,439 @@
+#!/usr/bin/env python3
+"""The verification suite: every claim of models/verify/suite.toml, measured, judged, reported.
+
+    python tools/verify.py [--jobs N] [--only ID[,ID...]] [--suite models/verify/suite.toml]
+                           [--out docs/verification] [--work target/verify]
+
+Each claim of the three papers (Rosswog 2015, Abel 2011, Frontiere, Raskin & Owen 2017) is one
+entry of the suite. A measured entry names a model, the schemes to run it with, optional
+resolutions (`--set` overrides of the case file) and a metric (tools/verify_metrics.py); its
+judge compares the figure of one scheme (or a ratio, or a convergence order) with the paper's.
+Entries backed by a Rust test run that test and read its printed figure. Entries not built yet
+or out of reach on this machine say why. The report goes to docs/verification/README.md with
+one PNG per measured claim next to it; the runs stay under target/verify/runs/.
+
+Runs are independent processes: --jobs N runs N at once, each with cores/N threads.
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures as cf
+import hashlib
+import json
+import math
+import os
+import platform
+import re
+import shutil
+import subprocess
+import sys
+import time
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from verify_metrics import METRICS, parse_kernel_table, summary_value  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+BIN = ROOT / "target" / "release" / "sphfmu"
+PAPERS = {
+    "rosswog": "Rosswog (2015), Boosting the accuracy of SPH (Newtonian part)",
+    "rpsph": "Abel (2011), rpSPH: a novel smoothed particle hydrodynamics algorithm",
+    "crksph": "Frontiere, Raskin & Owen (2017), CRKSPH",
+}
+
+
+@dataclass
+class Run:
+    """One `sphfmu run` of a model with a scheme and overrides, or one Rust test."""
+
+    model: str
+    scheme: str
+    sets: tuple[str, ...]
+    dir: Path
+    summary: dict = field(default_factory=dict)
+    error: str | None = None
+    seconds: float = 0.0
+    kernel_table: dict = field(default_factory=dict)
+
+    def command(self, threads: int) -> list[str]:
+        cmd = [str(BIN), "run", self.model, "--out", str(self.dir), "--quiet", "--threads", str(threads)]
+        if self.scheme != "case":
+            cmd += ["--scheme", self.scheme]
+        for s in self.sets:
+            cmd += ["--set", s]
+        # every run ends with a CSV snapshot the metrics read (and a VTU for ParaView)
+        cmd += ["--set", 'output.formats=["csv", "vtu"]']
+        return cmd
+
+    def shown(self) -> str:
+        """The command as a user would type it (relative paths, no --out)."""
+        if self.model == "kernels":
+            return "sphfmu kernels"
+        parts = ["sphfmu run", self.model]
+        if self.scheme != "case":
+            parts += ["--scheme", self.scheme]
+        parts += [f"--set '{s}'" for s in self.sets]
+        return " ".join(parts)
+
+
+def run_key(model: str, scheme: str, sets: tuple[str, ...]) -> str:
+    h = hashlib.sha1(json.dumps([model, scheme, sets]).encode()).hexdigest()[:8]
+    return f"{Path(model).stem}-{scheme}-{h}"
+
+
+def execute(run: Run, threads: int) -> Run:
+    if run.dir.exists():
+        shutil.rmtree(run.dir)
+    run.dir.mkdir(parents=True)
+    t0 = time.time()
+    p = subprocess.run(run.command(threads), cwd=ROOT, capture_output=True, text=True)
+    run.seconds = time.time() - t0
+    (run.dir / "log.txt").write_text(p.stdout + p.stderr)
+    if p.returncode != 0:
+        last = (p.stderr.strip().splitlines() or ["(no message)"])[-1]
+        run.error = f"exit {p.returncode}: {last.removeprefix('sphfmu: ')}"
+    else:
+        run.summary = json.loads((run.dir / "summary.json").read_text())
+    return run
+
+
+def execute_test(filt: str, ignored: bool) -> tuple[bool, str, float]:
+    cmd = ["cargo", "test", "--release", "-p", "sphfmu", "--test", "all", "-q", filt, "--", "--nocapture", "--exact"]
+    if ignored:
+        cmd.append("--ignored")
+    t0 = time.time()
+    p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+    return p.returncode == 0, p.stdout + p.stderr, time.time() - t0
+
+
+# ----------------------------------------------------------------------------- judging
+
+
+def fit_order(ns: list[float], errs: list[float]) -> float:
+    """Least-squares slope of −log(err) against log(N): the convergence order."""
+    xs = [math.log(n) for n in ns]
+    ys = [-math.log(e) for e in errs]
+    mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+    return sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
+
+
+def judge(claim: dict, figures: dict) -> tuple[str, str]:
+    """(verdict, our figure as text) from figures[scheme][label] (label: a resolution's N or '')."""
+    j = claim["judge"]
+    kind = j["kind"]
+    metric = claim["run"]["metric"]
+
+    def value(scheme: str, label=None) -> float:
+        series = figures[scheme]
+        if label is None:
+            label = list(series)[-1]  # the finest resolution
+        v = series[label]
+        if isinstance(v, str):
+            raise ValueError(f"{scheme}: {v}")
+        return v
+
+    try:
+        if kind == "order":
+            series = figures[j["scheme"]]
+            bad = [v for v in series.values() if isinstance(v, str)]
+            if bad:
+                raise ValueError(f"{j['scheme']}: {bad[0]}")
+            ns, errs = [float(n) for n in series], list(series.values())
+            got = fit_order(ns, errs)
+            text = f"{j['scheme']}: order {got:.2f} ({metric} {errs[0]:.3g} → {errs[-1]:.3g}, N {ns[0]:g} → {ns[-1]:g})"
+        elif kind == "ratio":
+            a, b = j["schemes"]
+            got = value(a) / value(b)
+            text = f"{metric} {a} / {b} = {got:.3g} ({value(a):.3g} / {value(b):.3g})"
+        else:
+            got = value(j["scheme"])
+            text = f"{j['scheme']}: {metric} = {got:.4g}"
+    except (ValueError, KeyError) as e:
+        return "not reproduced", f"run failed: {e}"
+    lo, hi = j.get("min", -math.inf), j.get("max", math.inf)
+    ok = lo <= got <= hi and math.isfinite(got)
+    return ("reproduced" if ok else "not reproduced"), text
+
+
+# ----------------------------------------------------------------------------- plots
+
+
+def plot_claim(claim: dict, figures: dict, png: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    r = claim["run"]
+    metric = r["metric"]
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    if "resolutions" in r:
+        for scheme, series in figures.items():
+            pts = [(float(n), v) for n, v in series.items() if not isinstance(v, str) and v > 0]
+            if pts:
+                ax.loglog(*zip(*pts), "o-", label=scheme)
+        ns = [float(x["n"]) for x in r["resolutions"]]
+        order = claim.get("judge", {}).get("min")
+        scheme = claim.get("judge", {}).get("scheme")
+        if claim.get("judge", {}).get("kind") == "order" and scheme in figures and order:
+            first = next((v for v in figures[scheme].values() if not isinstance(v, str)), None)
+            if first:
+                ax.loglog(ns, [first * (n / ns[0]) ** -order for n in ns], "k--", lw=0.8, label=f"N^-{order:g} (paper's order)")
+        ax.set_xlabel(r.get("n_label", "N (particles per dimension)"))
+        ax.set_ylabel(f"{metric} ({r.get('unit', 'dimensionless')})")
+        ax.legend(fontsize=7)
+    else:
+        names, vals, colours = [], [], []
+        for scheme, series in figures.items():
+            v = list(series.values())[-1]
+            names.append(scheme)
+            vals.append(v if not isinstance(v, str) else 0.0)
+            colours.append("tab:red" if isinstance(v, str) else "tab:blue")
+        ax.bar(range(len(names)), vals, color=colours)
+        ax.set_xticks(range(len(names)), names, rotation=30, ha="right", fontsize=8)
+        pos = [v for v in vals if v > 0]
+        if pos and max(pos) / min(pos) > 100:
+            ax.set_yscale("log")
+        ax.set_ylabel(f"{metric} ({r.get('unit', 'dimensionless')})")
+        ax.set_xlabel("scheme (red: the run failed)")
+        for key, style in (("min", "g--"), ("max", "r--")):
+            lim = claim.get("judge", {}).get(key)
+            if lim is not None and claim["judge"]["kind"] == "value" and math.isfinite(lim):
+                ax.axhline(lim, ls="--", color=style[0], lw=0.8, label=f"verdict {key} {lim:g}")
+        if claim.get("judge"):
+            ax.legend(fontsize=7)
+    ax.set_title(f"{claim['id']}: {claim['claim'][:70]}", fontsize=8)
+    fig.text(0.01, 0.01, "python tools/verify.py --only " + claim["id"], fontsize=6, color="grey")
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+    plt.close(fig)
+
+
+# ----------------------------------------------------------------------------- suite
+
+
+def expand(claim: dict, work: Path) -> list[tuple[str, str, Run, dict]]:
+    """(scheme or variant label, resolution label, run, metric arguments) of a measured claim."""
+    r = claim["run"]
+    out = []
+    resolutions = r.get("resolutions", [{"n": "", "set": []}])
+    for entry in r["schemes"]:
+        # a scheme preset's name, or a variant: {label, scheme ("case": the file's own), set}
+        args = dict(r.get("metric_args", {}))
+        if isinstance(entry, str):
+            label, scheme, extra = entry, entry, ()
+        else:
+            label, scheme, extra = entry["label"], entry.get("scheme", "case"), tuple(entry.get("set", []))
+            args.update(entry.get("metric_args", {}))
+        for res in resolutions:
+            sets = tuple(r.get("set", [])) + extra + tuple(res["set"])
+            key = run_key(r["model"], scheme, sets)
+            out.append((label, str(res["n"]), Run(r["model"], scheme, sets, work / "runs" / key), args))
+    return out
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--suite", default="models/verify/suite.toml")
+    ap.add_argument("--out", default="docs/verification")
+    ap.add_argument("--work", default="target/verify")
+    ap.add_argument("--jobs", type=int, default=1, help="runs at once (each gets cores/jobs threads)")
+    ap.add_argument("--only", default="", help="comma-separated claim ids")
+    a = ap.parse_args()
+    if a.jobs < 1:
+        ap.error("--jobs: must be ≥ 1")
+    suite = tomllib.loads((ROOT / a.suite).read_text())
+    claims = suite["claim"]
+    if a.only:
+        wanted = set(a.only.split(","))
+        unknown = wanted - {c["id"] for c in claims}
+        if unknown:
+            ap.error(f"--only: no claim {sorted(unknown)} in {a.suite}")
+        claims = [c for c in claims if c["id"] in wanted]
+    if not BIN.exists():
+        print(f"verify: {BIN} is missing; run `make build` first", file=sys.stderr)
+        return 2
+    work, out = ROOT / a.work, ROOT / a.out
+    out.mkdir(parents=True, exist_ok=True)
+    t_start = time.time()
+
+    # every distinct run once, however many claims read it
+    runs: dict[Path, Run] = {}
+    plan = {}
+    for c in claims:
+        if "run" in c:
+            plan[c["id"]] = expand(c, work)
+            for _, _, run, _ in plan[c["id"]]:
+                runs.setdefault(run.dir, run)
+    cores = os.cpu_count() or 1
+    threads = max(1, cores // a.jobs)
+    todo = [r for r in runs.values() if r.model != "kernels"]
+    print(f"verify: {len(claims)} claims, {len(todo)} runs, {a.jobs} at once with {threads} threads each")
+    done = 0
+    with cf.ThreadPoolExecutor(max_workers=a.jobs) as pool:
+        futures = [pool.submit(execute, r, threads) for r in todo]
+        for f in cf.as_completed(futures):
+            r = f.result()
+            done += 1
+            status = r.error or f"{r.summary.get('steps', '?')} steps"
+            print(f"  [{done}/{len(todo)}] {r.shown()}: {r.seconds:.1f} s, {status}", flush=True)
+    kernel_runs = [r for r in runs.values() if r.model == "kernels"]
+    if kernel_runs:
+        t0 = time.time()
+        text = subprocess.run([str(BIN), "kernels"], capture_output=True, text=True, check=True).stdout
+        for r in kernel_runs:
+            r.kernel_table, r.seconds = parse_kernel_table(text), time.time() - t0
+
+    rows = []
+    for c in claims:
+        row = {k: c.get(k, "") for k in ("id", "paper", "number", "claim", "paper_value", "note", "reduced")}
+        status = c.get("status", "measured")
+        if status in ("not-built", "out-of-reach"):
+            row.update(verdict="out of reach" if status == "out-of-reach" else "not built yet", ours=c["why"], command="", cost=c.get("cost", ""))
+        elif "test" in c:
+            t = c["test"]
+            ok, log, secs = execute_test(t["filter"], t.get("ignored", False))
+            m = re.search(t["figure"], log)
+            figure = m.group(0) if m else "(figure line not found in the test output)"
+            row.update(
+                verdict="reproduced" if ok and m else "not reproduced",
+                ours=figure + ("" if ok else " — the test FAILED"),
+                command=f"cargo test --release -p sphfmu --test all {t['filter']} -- --exact --nocapture"
+                + (" --ignored" if t.get("ignored") else ""),
+                cost=f"{secs:.0f} s",
+            )
+            (work / "tests").mkdir(parents=True, exist_ok=True)
+            (work / "tests" / f"{c['id']}.log").write_text(log)
+        else:
+            figures: dict[str, dict[str, float | str]] = {}
+            cost = 0.0
+            for scheme, label, run, args in plan[c["id"]]:
+                run = runs[run.dir]
+                cost += run.seconds
+                if run.error:
+                    val: float | str = run.error
+                else:
+                    try:
+                        m = c["run"]["metric"]
+                        val = METRICS[m](run, args) if m in METRICS else summary_value(run.summary, m)
+                    except (KeyError, ValueError) as e:
+                        val = f"metric: {e}"
+                figures.setdefault(scheme, {})[label] = val
+            verdict, ours = judge(c, figures) if "judge" in c else ("measured", "")
+            png = out / f"{c['id']}.png"
+            plot_claim(c, figures, png)
+            judged = c.get("judge", {}).get("scheme")
+            profile = None
+            for scheme, label, run, _ in plan[c["id"]]:
+                if scheme == judged and (run.dir / "profile.png").exists():
+                    profile = run.dir / "profile.png"  # the finest resolution, last
+            if profile:
+                shutil.copy(profile, out / f"{c['id']}-profile.png")
+            # the command of the judged scheme's finest run (the first scheme's for a ratio)
+            j = c.get("judge", {})
+            judged_label = j.get("scheme") or (j.get("schemes") or [None])[0]
+            first = next((run for s_, _, run, _ in reversed(plan[c["id"]]) if s_ == judged_label), plan[c["id"]][-1][2])
+            row.update(
+                verdict=verdict,
+                ours=ours,
+                command=first.shown(),
+                cost=f"{cost:.0f} s",
+                figures=figures,
+                png=png.name,
+                profile=(out / f"{c['id']}-profile.png").name if profile else None,
+                metric=c["run"]["metric"],
+                lower_is_better=c["run"].get("lower_is_better", True),
+            )
+        rows.append(row)
+        print(f"  {c['id']}: {row['verdict']} — {row['ours']}")
+
+    write_report(out / "README.md", rows, a, time.time() - t_start)
+    (work / "rows.json").write_text(json.dumps(rows, indent=1, default=str))
+    print(f"verify: report {out / 'README.md'} ({time.time() - t_start:.0f} s)")
+    return 0
+
+
+def fmt(v) -> str:
+    if isinstance(v, str):
+        return "failed: " + v.split(": ", 1)[-1][:60]
+    return f"{v:.3g}"
+
+
+def write_report(path: Path, rows: list[dict], a, seconds: float) -> None:
+    cpu = ""
+    try:
+        cpu = next(l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name"))
+    except (OSError, StopIteration):
+        cpu = platform.processor()
+    counts = {}
+    for r in rows:
+        counts[r["verdict"]] = counts.get(r["verdict"], 0) + 1
+    o = [
+        "# Verification report",
+        "",
+        "Generated by `make verify` (`python tools/verify.py --jobs 2`, suite `models/verify/suite.toml`);",
+        "do not edit by hand, rerun it. Every figure below comes from the command in its row.",
+        f"Machine: {cpu}, {os.cpu_count()} cores. Wall time of this report: {seconds / 60:.1f} min"
+        + (f" (claims: {a.only})" if a.only else "") + ".",
+        "",
+        "Verdicts: " + ", ".join(f"{v} {n}" for v, n in sorted(counts.items())) + ".",
+        "**reproduced**: our figure meets the paper's claim by the criterion in the suite file;",
+        "**not reproduced**: it does not (the note says what was measured about why);",
+        "**out of reach**: needs what this machine or code does not have (cost or reason given);",
+        "**not built yet**: no model or measurement yet. Claims marked *reduced* run below the paper's resolution.",
+        "",
+    ]
+    for paper, title in PAPERS.items():
+        sel = [r for r in rows if r["paper"] == paper]
+        if not sel:
+            continue
+        o += [f"## {title}", "", "| # | claim | paper | ours | verdict | command | cost |", "|---|---|---|---|---|---|---|"]
+        for r in sel:
+            claim = r["claim"] + (" *(reduced)*" if r.get("reduced") else "")
+            ours = r["ours"] + (f" ([plot]({r['png']}))" if r.get("png") else "")
+            cmd = f"`{r['command']}`" if r["command"] else ""
+            o.append(f"| {r['number']} | {claim} | {r['paper_value']} | {ours} | **{r['verdict']}** | {cmd} | {r['cost']} |")
+        o.append("")
+        for r in sel:
+            if r.get("figures") and len(r["figures"]) > 1 or r.get("note") or r.get("profile"):
+                o.append(f"**{r['id']}** ({r['claim']})")
+                o.append("")
+                if r.get("note"):
+                    o += [r["note"].strip(), ""]
+                if r.get("figures"):
+                    labels = list(next(iter(r["figures"].values())).keys())
+                    head = [f"N = {l}" if l else r["metric"] for l in labels]
+                    o.append("| scheme | " + " | ".join(head) + " |")
+                    o.append("|---|" + "---|" * len(head))
+                    for s, series in r["figures"].items():
+                        o.append(f"| {s} | " + " | ".join(fmt(series[l]) for l in labels) + " |")
+                    o.append("")
+                if r.get("profile"):
+                    o += [f"![{r['id']} profile]({r['profile']})", ""]
+    o += ranking(rows)
+    path.write_text("\n".join(o) + "\n")
+
+
+def ranking(rows: list[dict]) -> list[str]:
+    """One line per measured test with several schemes: the schemes from best to worst."""
+    o = ["## Schemes ranked per test", "", "Best first by the test's metric at the finest resolution; failed runs last.", "",
+         "| test | metric | ranking |", "|---|---|---|"]
+    for r in rows:
+        f = r.get("figures")
+        if not f or len(f) < 2:
+            continue
+        last = {s: list(series.values())[-1] for s, series in f.items()}
+        ok = sorted((v, s) for s, v in last.items() if not isinstance(v, str) and math.isfinite(v))
+        if not r.get("lower_is_better", True):
+            ok = ok[::-1]
+        failed = [s for s, v in last.items() if isinstance(v, str)]
+        text = " > ".join(f"{s} ({v:.3g})" for v, s in ok) + "".join(f" > {s} (failed)" for s in failed)
+        o.append(f"| {r['id']} | {r['metric']} | {text} |")
+    return o + [""]
+
+
+if __name__ == "__main__":
+    sys.exit(main())

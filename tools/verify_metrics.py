@@ -1,0 +1,174 @@
+"""Figures the verification suite reads from a finished run (tools/verify.py).
+
+A metric is either a dotted key of the run's summary.json (``radial.post_shock_density``,
+``shock_tube.l1_density``, ``vortex_l1``, ``wall_seconds``) or one of the functions below,
+registered by name. Each takes the run (its directory, summary and case) and the claim's
+``metric_args`` and returns one float. The functions read the last CSV snapshot
+(``output.formats`` must hold "csv"; the suite sets it) and diagnostics.csv.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+
+METRICS = {}
+
+
+def metric(fn):
+    METRICS[fn.__name__] = fn
+    return fn
+
+
+def last_snapshot(run_dir: Path) -> dict[str, np.ndarray]:
+    """The last snapshot_*.csv as columns named without their units (x, vx, rho, P, cs ...)."""
+    files = sorted(run_dir.glob("snapshot_*.csv"))
+    if not files:
+        raise ValueError(f"{run_dir}: no CSV snapshot (the suite sets output.formats)")
+    with open(files[-1]) as f:
+        rows = list(csv.reader(f))
+    names = [h.split(" [")[0] for h in rows[0]]
+    data = np.array(rows[1:], dtype=float)
+    return {n: data[:, i] for i, n in enumerate(names)}
+
+
+def diagnostics(run_dir: Path) -> dict[str, np.ndarray]:
+    with open(run_dir / "diagnostics.csv") as f:
+        rows = list(csv.reader(f))
+    names = [h.split(" [")[0] for h in rows[0]]
+    data = np.array(rows[1:], dtype=float)
+    return {n: data[:, i] for i, n in enumerate(names)}
+
+
+def summary_value(summary: dict, key: str) -> float:
+    v = summary
+    for part in key.split("."):
+        if not isinstance(v, dict) or part not in v:
+            raise KeyError(f"summary.json has no {key!r}")
+        v = v[part]
+    if v is None:
+        raise KeyError(f"summary.json's {key!r} is empty for this run")
+    return float(v)
+
+
+@metric
+def energy_change(run, args) -> float:
+    """|E(t_end) − E(0)| / |E(0)| of kinetic + internal (+ potential) energy."""
+    e0 = run.summary["initial"]["total_energy"]
+    e1 = run.summary["last"]["total_energy"]
+    return abs(e1 - e0) / abs(e0)
+
+
+@metric
+def angular_momentum_change(run, args) -> float:
+    """|L_z(t_end) − L_z(0)| / |L_z(0)| from diagnostics.csv (2D: L about the origin)."""
+    d = diagnostics(run.dir)
+    lz = d["Lz"]
+    return abs(lz[-1] - lz[0]) / abs(lz[0])
+
+
+@metric
+def transverse_velocity_ratio(run, args) -> float:
+    """max(|v_y|, |v_z|) / max |v_x| over the particles (CRKSPH claim 15, planar 3D Sod)."""
+    s = last_snapshot(run.dir)
+    vt = np.maximum(np.abs(s["vy"]), np.abs(s["vz"])).max()
+    return float(vt / np.abs(s["vx"]).max())
+
+
+@metric
+def mean_speed_over_sound(run, args) -> float:
+    """⟨|v|⟩/c_s over the particles inside ``box`` = [lo, hi] on every axis (the noise box's
+    moving particles, Rosswog §8.3)."""
+    s = last_snapshot(run.dir)
+    lo, hi = args["box"]
+    inside = np.ones(len(s["x"]), dtype=bool)
+    for axis in ("x", "y", "z")[: run.summary["dimension"]]:
+        inside &= (s[axis] > lo) & (s[axis] < hi)
+    speed = np.sqrt(s["vx"] ** 2 + s["vy"] ** 2 + s["vz"] ** 2)
+    return float(np.mean(speed[inside] / s["cs"][inside]))
+
+
+@metric
+def vortex_peak(run, args) -> float:
+    """The Gresho vortex's peak azimuthal velocity: the largest mean v_φ over rings of width
+    ``bin`` about ``center`` (CRKSPH claim 10: ≈ 1 at r = 0.2)."""
+    s = last_snapshot(run.dir)
+    cx, cy = args.get("center", [0.5, 0.5])
+    dx, dy = s["x"] - cx, s["y"] - cy
+    r = np.hypot(dx, dy)
+    vphi = (dx * s["vy"] - dy * s["vx"]) / np.where(r > 0, r, 1.0)
+    width = args.get("bin", 0.02)
+    k = (r / width).astype(int)
+    means = [vphi[k == i].mean() for i in range(int(0.5 / width)) if np.any(k == i)]
+    return float(max(means))
+
+
+@metric
+def plateau_ratio(run, args) -> float:
+    """Mean density of the particles in the middle half of [x_from, x_to] (a post-shock
+    plateau between the contact and the shock) over the exact plateau ``rho``."""
+    s = last_snapshot(run.dir)
+    a, b = args["x_from"], args["x_to"]
+    lo, hi = a + 0.25 * (b - a), a + 0.75 * (b - a)
+    sel = (s["x"] > lo) & (s["x"] < hi)
+    return float(s["rho"][sel].mean() / args["rho"])
+
+
+@metric
+def contact_pressure_blip(run, args) -> float:
+    """max |P − P*|/P* over the particles within ``width`` of the contact at ``x`` (the
+    pressure blip of a shock tube's contact discontinuity; rpSPH claim 10)."""
+    s = last_snapshot(run.dir)
+    sel = np.abs(s["x"] - args["x"]) < args["width"]
+    return float(np.abs(s["P"][sel] - args["p_star"]).max() / args["p_star"])
+
+
+@metric
+def kernel_density_error(run, args) -> float:
+    """Q1 = ε_ρ of kernel ``kernel`` on the hexagonal lattice, from `sphfmu kernels`."""
+    return run.kernel_table[args["kernel"]]["Q1 = ε_ρ"]
+
+
+@metric
+def kernel_gradient_error(run, args) -> float:
+    return run.kernel_table[args["kernel"]]["∇x error"]
+
+
+def parse_kernel_table(text: str) -> dict[str, dict[str, float]]:
+    lines = [l for l in text.splitlines() if l.startswith("|")]
+    head = [c.strip() for c in lines[0].strip("|").split("|")]
+    table = {}
+    for l in lines[2:]:
+        cells = [c.strip() for c in l.strip("|").split("|")]
+        row = {}
+        for h, c in zip(head[1:], cells[1:]):
+            try:
+                row[h] = float(c)
+            except ValueError:
+                row[h] = math.nan
+        table[cells[0]] = row
+    return table
+
+
+@metric
+def shock_radius_ratio(run, args) -> float:
+    """Shock radius over the exact one (Sedov, Noh): 1 is right, above 1 overshoots."""
+    r = run.summary["radial"]
+    return r["shock_radius"] / r["shock_radius_exact"]
+
+
+@metric
+def peak_density_ratio(run, args) -> float:
+    """Peak of the binned radial density over ``rho0`` (a Sedov shock's compression; the
+    strong-shock limit is (γ+1)/(γ−1) = 4 for γ = 5/3)."""
+    return run.summary["radial"]["peak_density"] / args.get("rho0", 1.0)
+
+
+@metric
+def post_shock_density_ratio(run, args) -> float:
+    """Post-shock density (mean over 0.3–0.8 r_s) over the exact one."""
+    r = run.summary["radial"]
+    return r["post_shock_density"] / r["post_shock_density_exact"]
