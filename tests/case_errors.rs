@@ -170,3 +170,44 @@ fn non_finite_state_is_reported_not_propagated() {
     let e = sim.step(f64::INFINITY).unwrap_err().to_string();
     assert!(e.contains("non-finite") || e.contains("unstable"), "{e}");
 }
+
+/// `--set`: a key of the case changed from the command line takes effect (every region's
+/// mass halved doubles the particles), and a key or value that is wrong is named.
+#[test]
+fn set_overrides_a_case_key_and_names_bad_ones() {
+    let sod = concat!(env!("CARGO_MANIFEST_DIR"), "/models/sod.toml");
+    let check = |sets: &[&str]| {
+        let mut cmd = bin();
+        cmd.args(["check", sod, "--build"]);
+        for s in sets {
+            cmd.args(["--set", s]);
+        }
+        let out = cmd.output().unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stdout).to_string()
+                + &String::from_utf8_lossy(&out.stderr),
+        )
+    };
+    let (code, text) = check(&["region.*.particle_mass=0.000390625"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(text.contains("1442 particles"), "{text}");
+    let (code, text) = check(&["region.1.particle_mass=0.000390625"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(text.contains("1081 particles"), "{text}");
+    for (set, says) in [
+        ("regoin.0.spacing=0.1", "no table \"regoin\""),
+        ("region.7.density=1.0", "index 7 out of range 0..2"),
+        ("time.t_end=-1", "time.t_end: must be a finite number > 0"),
+        ("time.t_end", "expected key=value"),
+        ("time.t_end=fast", "is not a TOML value"),
+        ("time.t_end.x=1", "is a value, not a table"),
+    ] {
+        let (code, text) = check(&[set]);
+        assert_eq!(code, Some(2), "{set}: {text}");
+        assert!(
+            text.contains(says) && text.trim().lines().count() == 1,
+            "{set}: {text}"
+        );
+    }
+}
