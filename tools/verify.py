@@ -84,7 +84,18 @@ def run_key(model: str, scheme: str, sets: tuple[str, ...]) -> str:
     return f"{Path(model).stem}-{scheme}-{h}"
 
 
-def execute(run: Run, threads: int) -> Run:
+def execute(run: Run, threads: int, reuse: bool = False) -> Run:
+    """Run it, or with `reuse` take the finished run in its directory made by the same command
+    and the same binary (command.json records both)."""
+    record = {"command": [run.model, run.scheme, list(run.sets)], "binary_mtime": BIN.stat().st_mtime}
+    done = run.dir / "command.json"
+    if reuse and done.exists() and json.loads(done.read_text()).get("command") == record["command"]:
+        old = json.loads(done.read_text())
+        if old.get("binary_mtime") == record["binary_mtime"]:
+            run.seconds, run.error = old["seconds"], old.get("error")
+            if not run.error:
+                run.summary = json.loads((run.dir / "summary.json").read_text())
+            return run
     if run.dir.exists():
         shutil.rmtree(run.dir)
     run.dir.mkdir(parents=True)
@@ -97,6 +108,7 @@ def execute(run: Run, threads: int) -> Run:
         run.error = f"exit {p.returncode}: {last.removeprefix('sphfmu: ')}"
     else:
         run.summary = json.loads((run.dir / "summary.json").read_text())
+    done.write_text(json.dumps({**record, "seconds": run.seconds, "error": run.error}))
     return run
 
 
@@ -242,6 +254,8 @@ def main() -> int:
     ap.add_argument("--work", default="target/verify")
     ap.add_argument("--jobs", type=int, default=1, help="runs at once (each gets cores/jobs threads)")
     ap.add_argument("--only", default="", help="comma-separated claim ids")
+    ap.add_argument("--reuse", action="store_true",
+                    help="keep finished runs made by the same command and binary (after an interruption)")
     a = ap.parse_args()
     if a.jobs < 1:
         ap.error("--jobs: must be ≥ 1")
@@ -274,7 +288,7 @@ def main() -> int:
     print(f"verify: {len(claims)} claims, {len(todo)} runs, {a.jobs} at once with {threads} threads each")
     done = 0
     with cf.ThreadPoolExecutor(max_workers=a.jobs) as pool:
-        futures = [pool.submit(execute, r, threads) for r in todo]
+        futures = [pool.submit(execute, r, threads, a.reuse) for r in todo]
         for f in cf.as_completed(futures):
             r = f.result()
             done += 1
