@@ -254,6 +254,8 @@ def main() -> int:
     ap.add_argument("--work", default="target/verify")
     ap.add_argument("--jobs", type=int, default=1, help="runs at once (each gets cores/jobs threads)")
     ap.add_argument("--only", default="", help="comma-separated claim ids")
+    ap.add_argument("--report-only", action="store_true",
+                    help="rewrite README.md from rows.json and the suite's current texts, measuring nothing")
     ap.add_argument("--reuse", action="store_true",
                     help="keep finished runs made by the same command and binary (after an interruption)")
     a = ap.parse_args()
@@ -267,10 +269,19 @@ def main() -> int:
         if unknown:
             ap.error(f"--only: no claim {sorted(unknown)} in {a.suite}")
         claims = [c for c in claims if c["id"] in wanted]
+    work, out = ROOT / a.work, ROOT / a.out
+    if a.report_only:
+        # the suite's texts (claims, notes) may have changed since the measurement: refresh them
+        rows = json.loads((out / "rows.json").read_text())
+        texts = {c["id"]: c for c in suite["claim"]}
+        for r in rows:
+            for k in ("claim", "paper_value", "note", "reduced"):
+                r[k] = texts.get(r["id"], {}).get(k, r.get(k, ""))
+        write_report(out / "README.md", rows, a, float(json.loads((out / "meta.json").read_text())["seconds"]))
+        return 0
     if not BIN.exists():
         print(f"verify: {BIN} is missing; run `make build` first", file=sys.stderr)
         return 2
-    work, out = ROOT / a.work, ROOT / a.out
     out.mkdir(parents=True, exist_ok=True)
     t_start = time.time()
 
@@ -375,6 +386,8 @@ def main() -> int:
         rows = [merged[i] for i in order if i in merged]
     record.write_text(json.dumps(rows, indent=1, default=str) + "\n")
     write_report(out / "README.md", rows, a, time.time() - t_start)
+    if not a.only:
+        (out / "meta.json").write_text(json.dumps({"seconds": time.time() - t_start}) + "\n")
     print(f"verify: report {out / 'README.md'} ({time.time() - t_start:.0f} s)")
     return 0
 
