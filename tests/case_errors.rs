@@ -194,7 +194,7 @@ fn set_overrides_a_case_key_and_names_bad_ones() {
     assert!(text.contains("1442 particles"), "{text}");
     let (code, text) = check(&["region.1.particle_mass=0.000390625"]);
     assert_eq!(code, Some(0), "{text}");
-    assert!(text.contains("1081 particles"), "{text}");
+    assert!(text.contains("801 particles"), "{text}");
     for (set, says) in [
         ("regoin.0.spacing=0.1", "no table \"regoin\""),
         ("region.7.density=1.0", "index 7 out of range 0..2"),

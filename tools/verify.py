@@ -277,6 +277,8 @@ def main() -> int:
         for r in rows:
             for k in ("claim", "paper_value", "note", "reduced"):
                 r[k] = texts.get(r["id"], {}).get(k, r.get(k, ""))
+            if "run" in texts.get(r["id"], {}):
+                r["ideal"] = texts[r["id"]]["run"].get("ideal")
         write_report(out / "README.md", rows, a, float(json.loads((out / "meta.json").read_text())["seconds"]))
         return 0
     if not BIN.exists():
@@ -371,6 +373,7 @@ def main() -> int:
                 profile=(out / f"{c['id']}-profile.png").name if profile else None,
                 metric=c["run"]["metric"],
                 lower_is_better=c["run"].get("lower_is_better", True),
+                ideal=c["run"].get("ideal"),
             )
         rows.append(row)
         print(f"  {c['id']}: {row['verdict']} — {row['ours']}")
@@ -390,6 +393,11 @@ def main() -> int:
         (out / "meta.json").write_text(json.dumps({"seconds": time.time() - t_start}) + "\n")
     print(f"verify: report {out / 'README.md'} ({time.time() - t_start:.0f} s)")
     return 0
+
+
+def cell(text: str) -> str:
+    """Text for a markdown table cell: a bar (|v|) would end the cell."""
+    return str(text).replace("|", "\\|").replace("\n", " ")
 
 
 def fmt(v) -> str:
@@ -429,14 +437,14 @@ def write_report(path: Path, rows: list[dict], a, seconds: float) -> None:
             continue
         o += [f"## {title}", "", "| # | claim | paper | ours | verdict | command | cost |", "|---|---|---|---|---|---|---|"]
         for r in sel:
-            claim = r["claim"] + (" *(reduced)*" if r.get("reduced") else "")
-            ours = r["ours"] + (f" ([plot]({r['png']}))" if r.get("png") else "")
-            cmd = f"`{r['command']}`" if r["command"] else ""
-            o.append(f"| {r['number']} | {claim} | {r['paper_value']} | {ours} | **{r['verdict']}** | {cmd} | {r['cost']} |")
+            claim = cell(r["claim"]) + (" *(reduced)*" if r.get("reduced") else "")
+            ours = cell(r["ours"]) + (f" ([plot]({r['png']}))" if r.get("png") else "")
+            cmd = f"`{cell(r['command'])}`" if r["command"] else ""
+            o.append(f"| {r['number']} | {claim} | {cell(r['paper_value'])} | {ours} | **{r['verdict']}** | {cmd} | {r['cost']} |")
         o.append("")
         for r in sel:
             if r.get("figures") and len(r["figures"]) > 1 or r.get("note") or r.get("profile"):
-                o.append(f"**{r['id']}** ({r['claim']})")
+                o.append(f"**{r['id']}** ({cell(r['claim'])})")
                 o.append("")
                 if r.get("note"):
                     o += [r["note"].strip(), ""]
@@ -446,7 +454,7 @@ def write_report(path: Path, rows: list[dict], a, seconds: float) -> None:
                     o.append("| scheme | " + " | ".join(head) + " |")
                     o.append("|---|" + "---|" * len(head))
                     for s, series in r["figures"].items():
-                        o.append(f"| {s} | " + " | ".join(fmt(series[l]) for l in labels) + " |")
+                        o.append(f"| {cell(s)} | " + " | ".join(cell(fmt(series[l])) for l in labels) + " |")
                     o.append("")
                 if r.get("profile"):
                     o += [f"![{r['id']} profile]({r['profile']})", ""]
@@ -456,16 +464,20 @@ def write_report(path: Path, rows: list[dict], a, seconds: float) -> None:
 
 def ranking(rows: list[dict]) -> list[str]:
     """One line per measured test with several schemes: the schemes from best to worst."""
-    o = ["## Schemes ranked per test", "", "Best first by the test's metric at the finest resolution; failed runs last.", "",
+    o = ["## Schemes ranked per test", "",
+         "Best first by the test's metric at the finest resolution (ratios to an exact value: closest to 1 first); failed runs last.", "",
          "| test | metric | ranking |", "|---|---|---|"]
     for r in rows:
         f = r.get("figures")
         if not f or len(f) < 2:
             continue
         last = {s: list(series.values())[-1] for s, series in f.items()}
-        ok = sorted((v, s) for s, v in last.items() if not isinstance(v, str) and math.isfinite(v))
-        if not r.get("lower_is_better", True):
-            ok = ok[::-1]
+        ok = [(v, s) for s, v in last.items() if not isinstance(v, str) and math.isfinite(v)]
+        ideal = r.get("ideal")
+        if ideal is not None:  # a ratio to the exact value: closest to it first
+            ok.sort(key=lambda e: abs(e[0] - ideal))
+        else:
+            ok.sort(reverse=not r.get("lower_is_better", True))
         failed = [s for s, v in last.items() if isinstance(v, str)]
         text = " > ".join(f"{s} ({v:.3g})" for v, s in ok) + "".join(f" > {s} (failed)" for s in failed)
         o.append(f"| {r['id']} | {r['metric']} | {text} |")
