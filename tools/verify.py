@@ -89,13 +89,12 @@ def execute(run: Run, threads: int, reuse: bool = False) -> Run:
     and the same binary (command.json records both)."""
     record = {"command": [run.model, run.scheme, list(run.sets)], "binary_mtime": BIN.stat().st_mtime}
     done = run.dir / "command.json"
-    if reuse and done.exists() and json.loads(done.read_text()).get("command") == record["command"]:
-        old = json.loads(done.read_text())
-        if old.get("binary_mtime") == record["binary_mtime"]:
-            run.seconds, run.error = old["seconds"], old.get("error")
-            if not run.error:
-                run.summary = json.loads((run.dir / "summary.json").read_text())
-            return run
+    old = json.loads(done.read_text()) if reuse and done.exists() else {}
+    if old.get("command") == record["command"] and old.get("binary_mtime") == record["binary_mtime"]:
+        run.seconds, run.error = old["seconds"], old.get("error")
+        if not run.error:
+            run.summary = json.loads((run.dir / "summary.json").read_text())
+        return run
     if run.dir.exists():
         shutil.rmtree(run.dir)
     run.dir.mkdir(parents=True)
@@ -196,7 +195,6 @@ def plot_claim(claim: dict, figures: dict, png: Path) -> None:
                 ax.loglog(ns, [first * (n / ns[0]) ** -order for n in ns], "k--", lw=0.8, label=f"N^-{order:g} (paper's order)")
         ax.set_xlabel(r.get("n_label", "N (particles per dimension)"))
         ax.set_ylabel(f"{metric} ({r.get('unit', 'dimensionless')})")
-        ax.legend(fontsize=7)
     else:
         names, vals, colours = [], [], []
         for scheme, series in figures.items():
@@ -211,12 +209,12 @@ def plot_claim(claim: dict, figures: dict, png: Path) -> None:
             ax.set_yscale("log")
         ax.set_ylabel(f"{metric} ({r.get('unit', 'dimensionless')})")
         ax.set_xlabel("scheme (red: the run failed)")
-        for key, style in (("min", "g--"), ("max", "r--")):
+        for key, colour in (("min", "g"), ("max", "r")):
             lim = claim.get("judge", {}).get(key)
             if lim is not None and claim["judge"]["kind"] == "value" and math.isfinite(lim):
-                ax.axhline(lim, ls="--", color=style[0], lw=0.8, label=f"verdict {key} {lim:g}")
-        if claim.get("judge"):
-            ax.legend(fontsize=7)
+                ax.axhline(lim, ls="--", color=colour, lw=0.8, label=f"verdict {key} {lim:g}")
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=7)
     ax.set_title(f"{claim['id']}: {claim['claim'][:70]}", fontsize=8)
     fig.text(0.01, 0.01, "python tools/verify.py --only " + claim["id"], fontsize=6, color="grey")
     fig.tight_layout()

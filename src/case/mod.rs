@@ -112,9 +112,7 @@ fn one_line(s: &str) -> String {
 impl Case {
     /// Read and validate a case file.
     pub fn load(path: &Path) -> Result<Case, CaseError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| CaseError(format!("{}: cannot read: {e}", path.display())))?;
-        Self::parse(&text).map_err(|e| CaseError(format!("{}: {}", path.display(), e.0)))
+        Self::load_with(path, &[])
     }
 
     /// Read a case file, set `key=value` overrides in it (`--set`), then validate it. A key is
@@ -123,12 +121,13 @@ impl Case {
     /// value (`0.01`, `"crksph"`, `[1.0, 2.0]`). A key must already exist, unless its last
     /// segment is new in an existing table, so that a typo cannot pass unnoticed as a new table.
     pub fn load_with(path: &Path, sets: &[String]) -> Result<Case, CaseError> {
-        if sets.is_empty() {
-            return Self::load(path);
-        }
         let text = std::fs::read_to_string(path)
             .map_err(|e| CaseError(format!("{}: cannot read: {e}", path.display())))?;
         let at = |e: CaseError| CaseError(format!("{}: {}", path.display(), e.0));
+        if sets.is_empty() {
+            // parsed as written, so errors keep the file's line numbers
+            return Self::parse(&text).map_err(at);
+        }
         let mut table: toml::Table =
             toml::from_str(&text).map_err(|e| at(CaseError(one_line(e.message()))))?;
         for s in sets {
