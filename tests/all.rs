@@ -15,6 +15,7 @@ mod crksph;
 mod cullen;
 mod dambreak;
 mod eos;
+mod fields;
 mod frame;
 mod glass;
 mod kernel_choice;

@@ -251,6 +251,7 @@ pub fn generate_particles<const D: usize>(
 ) -> Result<(Particles<D>, Vec<crate::boundary::bodies::Body<D>>), CaseError> {
     let mut p = Particles::<D>::default();
     let mut spacing_of = Vec::new();
+    let mut region_of = Vec::new();
     for (ri, r) in case.regions.iter().enumerate() {
         let (mut lo, mut hi) = case.region_box(r);
         // Clip to the domain on bounded axes.
@@ -289,6 +290,7 @@ pub fn generate_particles<const D: usize>(
             };
             p.push(m, x, s.vel, s.u, s.rho, h, r.material);
             spacing_of.push(vol.powf(1.0 / D as f64));
+            region_of.push(ri);
         }
     }
     if p.is_empty() {
@@ -368,6 +370,7 @@ pub fn generate_particles<const D: usize>(
             domain.enforce(x, &mut v);
         }
     }
+    super::fields::apply(&case.fields, &mut p, &region_of, &case.eos, domain)?;
     let bodies = if bodies_later {
         // align the walls with the first region's lattice (cell centres from its lower corner)
         let lo0 = case.regions.first().map(|r| case.region_box(r).0);

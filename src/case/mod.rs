@@ -4,6 +4,7 @@
 mod bodies;
 mod checks;
 mod estimate;
+pub mod fields;
 mod glass;
 mod ics;
 mod overrides;
@@ -70,6 +71,9 @@ pub struct Case {
     pub interfaces: Vec<Interface>,
     #[serde(default)]
     pub perturbation: Option<Perturbation>,
+    /// Initial-state fields as expressions of position (`fields.rs`).
+    #[serde(default, rename = "field")]
+    pub fields: Vec<fields::FieldExpr>,
     /// Relax the initial lattice into a glass (Rosswog (2015) Sec. 7.1).
     #[serde(default)]
     pub glass: Option<GlassConfig>,

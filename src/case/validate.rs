@@ -139,6 +139,7 @@ impl Case {
                 )));
             }
         }
+        super::fields::validate(&self.fields, d, self.regions.len())?;
         if let Some(g) = &self.gravity {
             self.vec_len("gravity", g)?;
         }

@@ -20,6 +20,10 @@ use rayon::prelude::*;
 pub struct PairWork<const D: usize> {
     pub list: NeighbourList,
     pub acc: Vec<Vector<D>>,
+    /// du/dt per particle that is no pair work but an antisymmetric exchange (m_i du_i =
+    /// −m_j du_j pair by pair, e.g. PSPH's artificial conductivity, G.10–G.12): added to the
+    /// compatible update as it is. Empty when the scheme has none.
+    pub exchange: Vec<f64>,
 }
 
 impl<const D: usize> PairWork<D> {
@@ -29,6 +33,7 @@ impl<const D: usize> PairWork<D> {
         self.acc.clear();
         self.acc
             .resize(sys.neighbours.total_pairs(), Vector::<D>::zeros());
+        self.exchange.clear();
     }
 }
 
@@ -57,7 +62,8 @@ pub fn entropy_weight(du_ij: f64, s_i: Option<f64>, s_j: Option<f64>) -> f64 {
     lower_share / sum
 }
 
-/// u¹ = u⁰ + Σ_j f_ij (v_j^{1/2} − v_i^{1/2})·a_ij Δt (eqs 65–66) for every particle. `v_half`
+/// u¹ = u⁰ + Σ_j f_ij (v_j^{1/2} − v_i^{1/2})·a_ij Δt (eqs 65–66), plus the exchange term of
+/// [`PairWork::exchange`] times Δt, for every particle. `v_half`
 /// holds (v⁰ + v¹)/2, `s0` the start-of-step entropy proxies, `frozen` particles keep u⁰.
 pub fn thermal_update<const D: usize>(
     sys: &System<D>,
@@ -83,6 +89,9 @@ pub fn thermal_update<const D: usize>(
                 let vj = dom.image_velocity(&v_half[j], code);
                 let du_ij = (vj - v_half[i]).dot(&work.acc[lo + k]);
                 du += entropy_weight(du_ij, s0[i], s0[j]) * du_ij;
+            }
+            if let Some(x) = work.exchange.get(i) {
+                du += x;
             }
             u0[i] + du * dt
         })

@@ -66,7 +66,7 @@ pub trait Scheme<const D: usize>: Send + Sync {
 /// (`preferred_kernel`, `preferred_integrator`); a unit test checks each name parses.
 pub const PRESETS: [(&str, &str); 10] = [
     ("standard", "traditional grad-h SPH, Monaghan-Gingold viscosity (alpha, beta) with the Balsara switch, optional Price conductivity; density summation or continuity (liquids; delta-SPH), laminar viscosity"),
-    ("rpsph", "relative-pressure SPH (Abel 2011): the standard passes with the pressure differences P_b - P_a in the force; gradient = own-h | symmetric, shock_switch"),
+    ("rpsph", "relative-pressure SPH (Abel 2011): the standard passes with the pressure differences P_b - P_a in the force; gradient = symmetric (default) | own-h, energy = entropy (default) | eq18, shock_switch"),
     ("rosswog-f1", "Rosswog 2015 F1: integral-approximation gradients, volume element X = P^k (k = 0.05), triggered dissipation (shock and noise triggers)"),
     ("rosswog-f2", "as F1 with kernel gradients and grad-h terms"),
     ("rosswog-f3", "as F1 with X = m"),

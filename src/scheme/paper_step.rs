@@ -14,6 +14,9 @@ pub(crate) struct PairSums<const D: usize> {
     pub q_max: f64,
     /// Largest approach speed max(0, (v_j − v_i)·x̂_ij).
     pub approach: f64,
+    /// The part of `dudt` that is an antisymmetric exchange rather than pair work (PSPH's
+    /// conduction), kept apart for the compatible update.
+    pub exchange: f64,
 }
 
 impl<const D: usize> Default for PairSums<D> {
@@ -23,6 +26,7 @@ impl<const D: usize> Default for PairSums<D> {
             dudt: 0.0,
             q_max: 0.0,
             approach: 0.0,
+            exchange: 0.0,
         }
     }
 }

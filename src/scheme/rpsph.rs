@@ -29,6 +29,19 @@ pub struct RpsphParams {
     pub gradient: RpsphGradient,
     /// Fall back to standard SPH where −h ∇·v > 3 c_s (the paper's hybrid shock switch).
     pub shock_switch: bool,
+    /// Which energy equation: `entropy` (the form the paper prefers, the particle's own
+    /// P dV work) or `eq18` (the alternative printed for internal-energy codes).
+    pub energy: RpsphEnergy,
+}
+
+/// The energy equation of rpSPH (Abel 2011, eqs 17–18 and the text after them).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RpsphEnergy {
+    /// du_a/dt = P_a/ρ_a² Σ m_b v_ab·∇_a W_ab: the entropy formulation written for u.
+    Entropy,
+    /// Eq. 18, du_a/dt = Σ m_b P_b/ρ_b² v_ab·∇_a W_ab(h_a).
+    Eq18,
 }
 
 impl Default for RpsphParams {
@@ -40,8 +53,20 @@ impl Default for RpsphParams {
             balsara: s.balsara,
             conductivity: s.conductivity,
             epsilon: s.epsilon,
-            gradient: RpsphGradient::OwnH,
+            // Decision (Abel 2011 leaves the variant per test open; eq. 4 is variant A, App. B
+            // variant B): the default is B, the symmetrised gradient. Measured on Sod (1442
+            // particles, α = 1): the contact blip is 0.006 with B and 0.16 with A, and A puts
+            // the shock at x ≈ 0.22 instead of 0.265 with L1(ρ) 1.6e-2. App. B calls B "useful
+            // for problems with large density gradients", and a public Gadget-3 descendant
+            // implements B under its RPSPH flag. A stays available as gradient = "own-h".
+            gradient: RpsphGradient::Symmetric,
             shock_switch: false,
+            // Decision (Abel 2011 prefers the entropy formulation, after eq. 18, and offers eq. 18 for
+            // internal-energy codes): the default is the entropy form. Measured on a Sedov spike
+            // in 1D (models/verify/sedov1d.toml): with eq. 18 the total energy grew 600× over
+            // 191,343 steps, since the hot particle is heated by its cold neighbours' P and never
+            // does P dV work of its own; in 2D the time step collapsed at t = 0.027.
+            energy: RpsphEnergy::Entropy,
         }
     }
 }
@@ -71,6 +96,7 @@ pub fn build(params: RpsphParams) -> StandardSph {
     let form = PressureForm::Relative {
         symmetric: params.gradient == RpsphGradient::Symmetric,
         shock_switch: params.shock_switch,
+        neighbour_pressure_work: params.energy == RpsphEnergy::Eq18,
     };
     StandardSph::with_form(params.viscosity(), form, "rpsph")
 }

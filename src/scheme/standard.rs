@@ -351,12 +351,18 @@ fn finish_gradients<const D: usize>(
 pub(crate) enum PressureForm {
     /// Standard grad-h form (Rosswog (2015) with X = m; Abel (2011) eq. 2).
     GradH,
-    /// rpSPH (Abel 2011, Abel (2011)): a_a = −Σ m_b (P_b − P_a)/ρ_b² ∇W, with ∇_a W_ab(h_a)
-    /// (eq. 4, `symmetric = false`) or ∇̄W (Appendix B variant, `symmetric = true`); when
-    /// `shock_switch`, particles with −h ∇·v > 3c use GradH (§3.7). Energy: eq. 18 as printed,
-    /// du_a/dt = Σ m_b P_b/ρ_b² v_ab·∇_a W_ab(h_a) — the printed text is ambiguous between
-    /// ρ_b ρ_b and ρ_a ρ_b; we implement the printed ρ_b² (decision recorded here, in one place).
-    Relative { symmetric: bool, shock_switch: bool },
+    /// rpSPH (Abel 2011): a_a = −Σ m_b (P_b − P_a)/ρ_b² ∇W, with ∇_a W_ab(h_a) (eq. 4,
+    /// `symmetric = false`) or ∇̄W (Appendix B variant, `symmetric = true`); when
+    /// `shock_switch`, particles with −h ∇·v > 3c use GradH (§3.7). The energy equation is
+    /// the paper's preferred one (Discussion, after eq. 18: "we prefer the entropy formulation", which rpSPH does not
+    /// change) in u form, du_a/dt = P_a/(Ω_a ρ_a²) Σ m_b v_ab·∇_a W_ab(h_a), unless
+    /// `neighbour_pressure_work`: eq. 18 as printed, du_a/dt = Σ m_b P_b/ρ_b² v_ab·∇_a W_ab(h_a)
+    /// (printed "ρ_j ρ_j"; ρ_a ρ_b is possible, we take the print).
+    Relative {
+        symmetric: bool,
+        shock_switch: bool,
+        neighbour_pressure_work: bool,
+    },
 }
 
 /// Pair forces, pressure work, artificial viscosity (Monaghan–Gingold with Balsara) and
@@ -424,6 +430,13 @@ pub(crate) fn force_pass<const D: usize>(
             ..
         }
     );
+    let eq18 = matches!(
+        form,
+        PressureForm::Relative {
+            neighbour_pressure_work: true,
+            ..
+        }
+    );
     {
         let k = &sys.kernel;
         sys.gather_with(
@@ -449,7 +462,8 @@ pub(crate) fn force_pass<const D: usize>(
                 } else {
                     let g = if symmetric { fbar } else { fa };
                     let rho2 = rb.rho * rb.rho;
-                    ((rb.p - ra.p) / rho2 * g, rb.p / rho2 * mb * w * fa)
+                    let work = if eq18 { rb.p / rho2 } else { ra.pstd };
+                    ((rb.p - ra.p) / rho2 * g, work * mb * w * fa)
                 };
                 let vsig = ra.c + rb.c - 3.0 * w.min(0.0);
                 o.vsig = o.vsig.max(vsig);

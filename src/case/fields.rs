@@ -1,0 +1,289 @@
+//! `[[field]]`: initial-state fields given as expressions of position, applied after the
+//! regions are filled, so a Kelvin–Helmholtz seed mode, a Rayleigh–Taylor ripple, a shear
+//! profile or a smooth density step is data in the case file rather than one region per
+//! lattice row.
+//!
+//! ```toml
+//! [[field]]
+//! quantity = "velocity.y"
+//! expression = "A*sin(4*PI*x)*(exp(-(((y-0.25)/s)^2)) + exp(-(((y-0.75)/s)^2)))"
+//! parameters = { A = 0.01, s = 0.05 }
+//! ```
+//!
+//! The expression (parsed by the `exmex` crate: + − * / ^, sin … atanh, exp, ln, sqrt, abs,
+//! min, max, atan2, floor, PI, E) sees the particle's position `x`, `y`, `z`, its distance
+//! from the origin `r`, its current state `rho`, `p`, `u`, `vx`, `vy`, `vz`, and the entry's
+//! `parameters`. Beware one rule of exmex's grammar: a unary minus binds tighter than `^`, so
+//! `-a^2` is (−a)² = a²; write `-(a^2)` (pinned by a test below). Entries apply in file order. What each quantity changes:
+//! * `velocity.x|y|z`: that component;
+//! * `density`: ρ, with the particle's volume kept (its mass scales with ρ) and its pressure
+//!   kept (u follows from the EOS), so a density field at uniform pressure is one entry;
+//! * `pressure`: P, through u from the EOS at the particle's ρ;
+//! * `internal_energy`: u;
+//! * `displacement.x|y|z`: moves the particle (periodic axes wrap).
+
+use super::CaseError;
+use crate::domain::Domain;
+use crate::eos::{Eos, EosConfig};
+use crate::particles::{Particles, Vector};
+use exmex::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// What a `[[field]]` entry sets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Quantity {
+    #[serde(rename = "velocity.x")]
+    VelocityX,
+    #[serde(rename = "velocity.y")]
+    VelocityY,
+    #[serde(rename = "velocity.z")]
+    VelocityZ,
+    #[serde(rename = "density")]
+    Density,
+    #[serde(rename = "pressure")]
+    Pressure,
+    #[serde(rename = "internal_energy")]
+    InternalEnergy,
+    #[serde(rename = "displacement.x")]
+    DisplacementX,
+    #[serde(rename = "displacement.y")]
+    DisplacementY,
+    #[serde(rename = "displacement.z")]
+    DisplacementZ,
+}
+
+impl Quantity {
+    /// The axis of a vector quantity.
+    fn axis(self) -> Option<usize> {
+        match self {
+            Quantity::VelocityX | Quantity::DisplacementX => Some(0),
+            Quantity::VelocityY | Quantity::DisplacementY => Some(1),
+            Quantity::VelocityZ | Quantity::DisplacementZ => Some(2),
+            _ => None,
+        }
+    }
+}
+
+/// How the value combines with the state the regions gave.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Combine {
+    /// Replace the value.
+    #[default]
+    Set,
+    /// Add to the value (a perturbation on top of the regions' state).
+    Add,
+}
+
+/// One `[[field]]` entry.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FieldExpr {
+    pub quantity: Quantity,
+    pub expression: String,
+    #[serde(default)]
+    pub combine: Combine,
+    /// Indices of the `[[region]]`s whose particles it applies to (default: all).
+    #[serde(default)]
+    pub regions: Option<Vec<usize>>,
+    /// Named constants the expression may use (so `--set field.0.parameters.A=…` scans them).
+    #[serde(default)]
+    pub parameters: BTreeMap<String, f64>,
+}
+
+/// Names of the particle's own variables, in the order of [`Vars::values`].
+const VARIABLES: [&str; 10] = ["x", "y", "z", "r", "rho", "p", "u", "vx", "vy", "vz"];
+
+/// A parsed entry: the expression and, per variable it names, where its value comes from.
+struct Compiled {
+    expr: FlatEx<f64>,
+    /// index into `Vars::values` (< 10) or into the parameters (≥ 10)
+    slots: Vec<usize>,
+    params: Vec<f64>,
+}
+
+fn compile(i: usize, f: &FieldExpr, dim: usize) -> Result<Compiled, CaseError> {
+    let expr = exmex::parse::<f64>(&f.expression).map_err(|e| {
+        CaseError(format!(
+            "field[{i}].expression: cannot parse {:?}: {e}",
+            f.expression
+        ))
+    })?;
+    let params: Vec<(&String, &f64)> = f.parameters.iter().collect();
+    let mut slots = Vec::new();
+    for name in expr.var_names() {
+        let slot = match VARIABLES.iter().position(|v| v == name) {
+            // a coordinate the case does not have is an error, not a silent zero
+            Some(k) if k < 3 && k >= dim => {
+                return Err(CaseError(format!(
+                    "field[{i}].expression: `{name}` is not a coordinate of a {dim}D case"
+                )))
+            }
+            Some(k) => k,
+            None => match params.iter().position(|(p, _)| *p == name) {
+                Some(k) => VARIABLES.len() + k,
+                None => {
+                    return Err(CaseError(format!(
+                        "field[{i}].expression: unknown name `{name}` (allowed: {}, or a key of field[{i}].parameters)",
+                        VARIABLES.join(", ")
+                    )))
+                }
+            },
+        };
+        slots.push(slot);
+    }
+    for (name, v) in &params {
+        if !v.is_finite() {
+            return Err(CaseError(format!(
+                "field[{i}].parameters.{name}: must be finite, got {v}"
+            )));
+        }
+    }
+    Ok(Compiled {
+        expr,
+        slots,
+        params: params.iter().map(|(_, v)| **v).collect(),
+    })
+}
+
+/// Check every entry of a case: parse, names, quantity against the dimension, region indices.
+pub fn validate(fields: &[FieldExpr], dim: usize, regions: usize) -> Result<(), CaseError> {
+    for (i, f) in fields.iter().enumerate() {
+        if let Some(k) = f.quantity.axis() {
+            if k >= dim {
+                return Err(CaseError(format!(
+                    "field[{i}].quantity: {:?} needs axis {k}, but the case is {dim}D",
+                    f.quantity
+                )));
+            }
+        }
+        if let Some(rs) = &f.regions {
+            if let Some(bad) = rs.iter().find(|&&r| r >= regions) {
+                return Err(CaseError(format!(
+                    "field[{i}].regions: {bad} is not a region index (0 to {})",
+                    regions.saturating_sub(1)
+                )));
+            }
+        }
+        compile(i, f, dim)?;
+    }
+    Ok(())
+}
+
+/// Apply the entries to freshly generated particles; `region_of[a]` is the region that
+/// placed particle a.
+pub fn apply<const D: usize>(
+    fields: &[FieldExpr],
+    p: &mut Particles<D>,
+    region_of: &[usize],
+    eos: &EosConfig,
+    domain: &Domain<D>,
+) -> Result<(), CaseError> {
+    for (i, f) in fields.iter().enumerate() {
+        let c = compile(i, f, D)?;
+        let mut args = vec![0.0; c.slots.len()];
+        for (a, region) in region_of.iter().enumerate() {
+            if let Some(rs) = &f.regions {
+                if !rs.contains(region) {
+                    continue;
+                }
+            }
+            let x = p.pos[a];
+            let pressure = eos.pressure(p.rho[a], p.u[a]);
+            let mut own = [0.0; 10];
+            for k in 0..D {
+                own[k] = x[k];
+                own[7 + k] = p.vel[a][k];
+            }
+            own[3] = x.norm();
+            own[4] = p.rho[a];
+            own[5] = pressure;
+            own[6] = p.u[a];
+            for (arg, &s) in args.iter_mut().zip(&c.slots) {
+                *arg = if s < own.len() {
+                    own[s]
+                } else {
+                    c.params[s - own.len()]
+                };
+            }
+            let value = c.expr.eval(&args).map_err(|e| {
+                CaseError(format!(
+                    "field[{i}].expression: at x = {:?}: {e}",
+                    x.as_slice()
+                ))
+            })?;
+            let old = match f.quantity {
+                Quantity::Density => p.rho[a],
+                Quantity::Pressure => pressure,
+                Quantity::InternalEnergy => p.u[a],
+                q => match q.axis() {
+                    Some(k)
+                        if matches!(
+                            q,
+                            Quantity::VelocityX | Quantity::VelocityY | Quantity::VelocityZ
+                        ) =>
+                    {
+                        p.vel[a][k]
+                    }
+                    _ => 0.0,
+                },
+            };
+            let v = match f.combine {
+                Combine::Set => value,
+                Combine::Add => old + value,
+            };
+            let positive = matches!(f.quantity, Quantity::Density);
+            let non_negative = matches!(f.quantity, Quantity::Pressure | Quantity::InternalEnergy);
+            if !v.is_finite() || (positive && v <= 0.0) || (non_negative && v < 0.0) {
+                let range = if positive {
+                    "finite and > 0"
+                } else if non_negative {
+                    "finite and ≥ 0"
+                } else {
+                    "finite"
+                };
+                return Err(CaseError(format!(
+                    "field[{i}].expression: gives {v} for {:?} at x = {:?}; it must be {range}",
+                    f.quantity,
+                    x.as_slice()
+                )));
+            }
+            match f.quantity {
+                Quantity::Density => {
+                    // same volume, same pressure
+                    p.mass[a] *= v / p.rho[a];
+                    p.rho[a] = v;
+                    p.u[a] = eos.internal_energy(v, pressure);
+                }
+                Quantity::Pressure => p.u[a] = eos.internal_energy(p.rho[a], v),
+                Quantity::InternalEnergy => p.u[a] = v,
+                Quantity::VelocityX | Quantity::VelocityY | Quantity::VelocityZ => {
+                    p.vel[a][f.quantity.axis().expect("vector")] = v;
+                }
+                Quantity::DisplacementX | Quantity::DisplacementY | Quantity::DisplacementZ => {
+                    let mut x = p.pos[a];
+                    x[f.quantity.axis().expect("vector")] += v;
+                    let mut dummy = Vector::<D>::zeros();
+                    domain.enforce(&mut x, &mut dummy);
+                    p.pos[a] = x;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use exmex::prelude::*;
+
+    /// The grammar rule the module documentation warns about: `-a^2` is (−a)², `-(a^2)` is −a².
+    #[test]
+    fn unary_minus_binds_tighter_than_power() {
+        let e = |s: &str| exmex::parse::<f64>(s).unwrap().eval(&[3.0]).unwrap();
+        assert_eq!(e("-a^2"), 9.0);
+        assert_eq!(e("-(a^2)"), -9.0);
+        assert_eq!(e("0-a^2"), -9.0);
+    }
+}
