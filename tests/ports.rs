@@ -325,6 +325,24 @@ fn bad_ports_in_a_case_are_named() {
         "no_slip = true\nmotion = { type = \"external\" }",
         "port[0].body: \"channel\" moves",
     );
+    // schemes measured unstable next to a port's buffer are refused by the setting that
+    // fixes them, and accepted with it
+    let scheme = "name = \"standard\"\nalpha = 0.0\nbeta = 0.0\nviscosity = 0.1";
+    check(scheme, "name = \"crksph\"", "scheme.limiter: crksph");
+    check(scheme, "name = \"rosswog-f1\"", "scheme.triggers: rosswog-f1");
+    check(scheme, "name = \"rosswog-f3\"", "scheme.triggers: rosswog-f3");
+    for fixed in [
+        "name = \"crksph\"\nlimiter = false",
+        "name = \"crksph\"\norder = \"zeroth\"",
+        "name = \"rosswog-f1\"\ntriggers = false",
+        "name = \"rosswog-f4\"",
+    ] {
+        let text = base.replacen(scheme, fixed, 1);
+        assert_ne!(text, base);
+        Case::parse(&text)
+            .and_then(|c| c.build::<2>().map(|_| ()))
+            .unwrap_or_else(|e| panic!("{fixed}: {e}"));
+    }
 }
 
 /// A closed 3D box of water with a disk port in its floor and a rectangular port in a side

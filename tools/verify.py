@@ -37,7 +37,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from verify_metrics import METRICS, parse_kernel_table, summary_value  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
-BIN = ROOT / "target" / "release" / "sphfmu"
+# SPHFMU_BIN runs the suite with a copy of the binary, so a rebuild meanwhile cannot change it
+BIN = Path(os.environ.get("SPHFMU_BIN", ROOT / "target" / "release" / "sphfmu"))
 PAPERS = {
     "rosswog": "Rosswog (2015), Boosting the accuracy of SPH (Newtonian part)",
     "rpsph": "Abel (2011), rpSPH: a novel smoothed particle hydrodynamics algorithm",
@@ -104,7 +105,8 @@ def execute(run: Run, threads: int, reuse: bool = False) -> Run:
     (run.dir / "log.txt").write_text(p.stdout + p.stderr)
     if p.returncode != 0:
         last = (p.stderr.strip().splitlines() or ["(no message)"])[-1]
-        run.error = f"exit {p.returncode}: {last.removeprefix('sphfmu: ')}"
+        last = re.sub(r"\s*\(snapshots so far kept in [^)]*\)", "", last.removeprefix("sphfmu: "))
+        run.error = f"exit {p.returncode}: {last}"
     else:
         run.summary = json.loads((run.dir / "summary.json").read_text())
     done.write_text(json.dumps({**record, "seconds": run.seconds, "error": run.error}))
@@ -269,14 +271,7 @@ def main() -> int:
         claims = [c for c in claims if c["id"] in wanted]
     work, out = ROOT / a.work, ROOT / a.out
     if a.report_only:
-        # the suite's texts (claims, notes) may have changed since the measurement: refresh them
-        rows = json.loads((out / "rows.json").read_text())
-        texts = {c["id"]: c for c in suite["claim"]}
-        for r in rows:
-            for k in ("claim", "paper_value", "note", "reduced"):
-                r[k] = texts.get(r["id"], {}).get(k, r.get(k, ""))
-            if "run" in texts.get(r["id"], {}):
-                r["ideal"] = texts[r["id"]]["run"].get("ideal")
+        rows = refresh_texts(json.loads((out / "rows.json").read_text()), suite)
         write_report(out / "README.md", rows, a, float(json.loads((out / "meta.json").read_text())["seconds"]))
         return 0
     if not BIN.exists():
@@ -384,13 +379,25 @@ def main() -> int:
         order = [c["id"] for c in suite["claim"]]
         merged = {r["id"]: r for r in old if r["id"] in order}
         merged.update(fresh)
-        rows = [merged[i] for i in order if i in merged]
+        rows = refresh_texts([merged[i] for i in order if i in merged], suite)
     record.write_text(json.dumps(rows, indent=1, default=str) + "\n")
     write_report(out / "README.md", rows, a, time.time() - t_start)
     if not a.only:
         (out / "meta.json").write_text(json.dumps({"seconds": time.time() - t_start}) + "\n")
     print(f"verify: report {out / 'README.md'} ({time.time() - t_start:.0f} s)")
     return 0
+
+
+def refresh_texts(rows: list[dict], suite: dict) -> list[dict]:
+    """Rows kept from an earlier measurement with the suite's current texts (claims, notes),
+    which may have changed since."""
+    texts = {c["id"]: c for c in suite["claim"]}
+    for r in rows:
+        for k in ("claim", "paper_value", "note", "reduced"):
+            r[k] = texts.get(r["id"], {}).get(k, r.get(k, ""))
+        if "run" in texts.get(r["id"], {}):
+            r["ideal"] = texts[r["id"]]["run"].get("ideal")
+    return rows
 
 
 def cell(text: str) -> str:

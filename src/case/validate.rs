@@ -65,6 +65,11 @@ impl Case {
                 "scheme.name: \"rpsph\" feels pressure differences only, so it gives no load on a [[body]]; use standard, rosswog-f1…f4, crksph, compsph, compsph-cullen or psph with bodies".into(),
             ));
         }
+        if !self.ports.is_empty() {
+            if let Some(why) = self.scheme.port_refusal() {
+                return Err(CaseError(why));
+            }
+        }
         let t = &self.time;
         let pos = |key: &str, v: f64| -> Result<(), CaseError> {
             if v.is_finite() && v > 0.0 {

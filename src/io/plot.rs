@@ -26,25 +26,66 @@ fn register_font() {
         plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular());
 }
 
+/// Axis ranges: x over both sets, y over the particles and the curve's points that lie within
+/// one particle range (at least |max|) of the particles' values. A curve that diverges (Sedov's
+/// exact u at the centre) is drawn whole and runs off the panel instead of flattening the
+/// particles into a line; the chart area clips it.
 fn bounds(pts: &[(f64, f64)], other: &[(f64, f64)]) -> (f64, f64, f64, f64) {
-    let all = pts.iter().chain(other.iter());
+    let finite = |&&(x, y): &&(f64, f64)| x.is_finite() && y.is_finite();
     let (mut x0, mut x1, mut y0, mut y1) = (
         f64::INFINITY,
         f64::NEG_INFINITY,
         f64::INFINITY,
         f64::NEG_INFINITY,
     );
-    for &(x, y) in all {
-        if x.is_finite() && y.is_finite() {
-            x0 = x0.min(x);
-            x1 = x1.max(x);
+    for &(x, y) in pts.iter().filter(finite) {
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    let (lo, hi) = if y0 <= y1 {
+        let reach = (y1 - y0).max(y0.abs().max(y1.abs()));
+        (y0 - reach, y1 + reach)
+    } else {
+        (f64::NEG_INFINITY, f64::INFINITY)
+    };
+    for &(x, y) in other.iter().filter(finite) {
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        if (lo..=hi).contains(&y) {
             y0 = y0.min(y);
             y1 = y1.max(y);
         }
     }
+    if !(y0 <= y1) {
+        (y0, y1) = (0.0, 1.0);
+    }
     let range = (y1 - y0).max(1e-12 * y1.abs().max(1.0));
     let pad = 0.06 * range;
     (x0, x1.max(x0 + 1e-12), y0 - pad, y1 + LEGEND_ROOM * range)
+}
+
+/// The curve within y0 ≤ y ≤ y1: points outside are dropped and a segment that crosses an edge
+/// ends on it (interpolated), so a diverging curve meets the panel's edge at the right x
+/// instead of running flat along it.
+fn clip_to(curve: &[(f64, f64)], y0: f64, y1: f64) -> Vec<(f64, f64)> {
+    let inside = |y: f64| (y0..=y1).contains(&y);
+    let mut out = Vec::with_capacity(curve.len());
+    for (k, &(x, y)) in curve.iter().enumerate() {
+        if k > 0 {
+            let (xa, ya) = curve[k - 1];
+            if inside(ya) != inside(y) && ya.is_finite() && y.is_finite() {
+                let edge = if ya.max(y) > y1 { y1 } else { y0 };
+                let t = (edge - ya) / (y - ya);
+                out.push((xa + t * (x - xa), edge));
+            }
+        }
+        if inside(y) {
+            out.push((x, y));
+        }
+    }
+    out
 }
 
 /// Write a PNG with the panels stacked in a grid (2 columns).
@@ -86,7 +127,7 @@ pub fn profile_png(path: &Path, caption: &str, panels: &[Panel<'_>]) -> Result<(
         }
         chart
             .draw_series(LineSeries::new(
-                panel.exact.iter().copied(),
+                clip_to(panel.exact, y0, y1),
                 RED.stroke_width(2),
             ))
             .map_err(|e| e.to_string())?

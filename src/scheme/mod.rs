@@ -148,6 +148,33 @@ impl SchemeConfig {
         )
     }
 
+    /// Why this scheme cannot run a case with `[[port]]`s, naming the setting that can.
+    /// Measured on models/drain2d.toml (a tank draining through a bottom port, Tait liquid):
+    /// rosswog-f1, f2 and f3 stop with a collapsed time step at t = 0.25, 0.095 and 0.47 s,
+    /// and all three finish with `triggers = false` (K = 1), as F4 (constant K) does with the
+    /// same Wendland kernel: the triggers let K fall in the liquid next to the buffer. CRKSPH
+    /// ends with a non-finite density at t = 0.40 s with its viscosity limiter on linear
+    /// reproducing kernels, and finishes with `limiter = false` or `order = "zeroth"`.
+    pub fn port_refusal(&self) -> Option<String> {
+        if let SchemeConfig::Crksph(p) = self {
+            if p.limiter && p.order == crksph::OrderName::Linear {
+                return Some("scheme.limiter: crksph with its viscosity limiter on linear reproducing kernels is unstable next to a [[port]]'s buffer (a tank draining through a port reached a non-finite density at t = 0.40 s); set scheme.limiter = false or scheme.order = \"zeroth\", or use standard, compsph or rosswog-f4".into());
+            }
+        }
+        if let Some((preset, o)) = self.rosswog() {
+            if o.resolve(preset).triggers {
+                let name = match preset {
+                    rosswog::Preset::F1 => "rosswog-f1",
+                    rosswog::Preset::F2 => "rosswog-f2",
+                    rosswog::Preset::F3 => "rosswog-f3",
+                    rosswog::Preset::F4 => "rosswog-f4",
+                };
+                return Some(format!("scheme.triggers: {name} with triggered dissipation is unstable next to a [[port]]'s buffer (a tank draining through a port lost its time step at t = 0.1-0.5 s); set scheme.triggers = false (constant K), or use rosswog-f4, standard or compsph"));
+            }
+        }
+        None
+    }
+
     /// One of the CRKSPH paper's schemes (CRKSPH, compSPH, compSPH+Cullen, PSPH).
     fn crksph_paper(&self) -> bool {
         matches!(
