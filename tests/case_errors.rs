@@ -211,3 +211,38 @@ fn set_overrides_a_case_key_and_names_bad_ones() {
         );
     }
 }
+
+/// `--scheme` then `--set`: the preset replaces the file's scheme first and the overrides
+/// apply to it (applied the other way round, the preset silently dropped `--set scheme.*`),
+/// and every shipped model survives the preset's round trip through TOML.
+#[test]
+fn scheme_preset_then_overrides_keeps_the_overrides() {
+    use sphfmu::scheme::SchemeConfig;
+    let models = concat!(env!("CARGO_MANIFEST_DIR"), "/models");
+    let sod = std::path::Path::new(models).join("sod.toml");
+    let sets = ["scheme.limiter=false".to_string(), "kernel.eta=2.5".to_string()];
+    let case = Case::load_with(&sod, Some("crksph"), &sets).unwrap();
+    match &case.scheme {
+        SchemeConfig::Crksph(p) => assert!(!p.limiter, "{p:?}"),
+        other => panic!("crksph expected, got {other:?}"),
+    }
+    assert_eq!(case.kernel.eta, Some(2.5));
+    // a key the preset does not have is named
+    let e = Case::load_with(&sod, Some("crksph"), &["scheme.balsara=false".to_string()])
+        .unwrap_err()
+        .0;
+    assert!(e.contains("balsara"), "{e}");
+    for dir in [models.to_string(), format!("{models}/verify")] {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|x| x == "toml") && !path.ends_with("suite.toml") {
+                let plain = Case::load_with(&path, Some("standard"), &[]).unwrap();
+                let set = ["case.author=\"x\"".to_string()];
+                let mut edited = Case::load_with(&path, Some("standard"), &set)
+                    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                edited.case.author = plain.case.author.clone();
+                assert_eq!(edited, plain, "{}", path.display());
+            }
+        }
+    }
+}

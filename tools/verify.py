@@ -35,6 +35,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from verify_metrics import METRICS, parse_kernel_table, summary_value  # noqa: E402
+from verify_plots import PLOTS  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 # SPHFMU_BIN runs the suite with a copy of the binary, so a rebuild meanwhile cannot change it
@@ -65,8 +66,10 @@ class Run:
             cmd += ["--scheme", self.scheme]
         for s in self.sets:
             cmd += ["--set", s]
-        # every run ends with a CSV snapshot the metrics read (and a VTU for ParaView)
-        cmd += ["--set", 'output.formats=["csv", "vtu"]']
+        # every run ends with a CSV snapshot the metrics read (and a VTU for ParaView), unless
+        # the claim chose (a time series of many snapshots: CSV only)
+        if not any(s.startswith("output.formats=") for s in self.sets):
+            cmd += ["--set", 'output.formats=["csv", "vtu"]']
         return cmd
 
     def shown(self) -> str:
@@ -133,9 +136,28 @@ def fit_order(ns: list[float], errs: list[float]) -> float:
     return sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
 
 
+def judges(claim: dict) -> list[dict]:
+    """The claim's judges: one `[claim.judge]` table, or several `[[claim.judge]]` that must all
+    pass (a claim with two parts, e.g. "30× less dissipation, and convergent")."""
+    j = claim.get("judge", [])
+    return [j] if isinstance(j, dict) else list(j)
+
+
+def judged_scheme(claim: dict) -> str | None:
+    """The scheme (or variant label) whose figure the first judge reads."""
+    j = (judges(claim) or [{}])[0]
+    return j.get("scheme") or (j.get("schemes") or [None])[0]
+
+
 def judge(claim: dict, figures: dict) -> tuple[str, str]:
+    """(verdict, our figure as text): reproduced when every judge passes."""
+    results = [judge_one(claim, j, figures) for j in judges(claim)]
+    verdict = "reproduced" if all(v == "reproduced" for v, _ in results) else "not reproduced"
+    return verdict, "; ".join(t for _, t in results)
+
+
+def judge_one(claim: dict, j: dict, figures: dict) -> tuple[str, str]:
     """(verdict, our figure as text) from figures[scheme][label] (label: a resolution's N or '')."""
-    j = claim["judge"]
     kind = j["kind"]
     metric = claim["run"]["metric"]
 
@@ -189,9 +211,9 @@ def plot_claim(claim: dict, figures: dict, png: Path) -> None:
             if pts:
                 ax.loglog(*zip(*pts), "o-", label=scheme)
         ns = [float(x["n"]) for x in r["resolutions"]]
-        order = claim.get("judge", {}).get("min")
-        scheme = claim.get("judge", {}).get("scheme")
-        if claim.get("judge", {}).get("kind") == "order" and scheme in figures and order:
+        oj = next((j for j in judges(claim) if j["kind"] == "order"), {})
+        order, scheme = oj.get("min"), oj.get("scheme")
+        if scheme in figures and order:
             first = next((v for v in figures[scheme].values() if not isinstance(v, str)), None)
             if first:
                 ax.loglog(ns, [first * (n / ns[0]) ** -order for n in ns], "k--", lw=0.8, label=f"N^-{order:g} (paper's order)")
@@ -211,10 +233,11 @@ def plot_claim(claim: dict, figures: dict, png: Path) -> None:
             ax.set_yscale("log")
         ax.set_ylabel(f"{metric} ({r.get('unit', 'dimensionless')})")
         ax.set_xlabel("scheme (red: the run failed)")
-        for key, colour in (("min", "g"), ("max", "r")):
-            lim = claim.get("judge", {}).get(key)
-            if lim is not None and claim["judge"]["kind"] == "value" and math.isfinite(lim):
-                ax.axhline(lim, ls="--", color=colour, lw=0.8, label=f"verdict {key} {lim:g}")
+        for j in judges(claim):
+            for key, colour in (("min", "g"), ("max", "r")):
+                lim = j.get(key)
+                if lim is not None and j["kind"] == "value" and math.isfinite(lim):
+                    ax.axhline(lim, ls="--", color=colour, lw=0.8, label=f"verdict {key} {lim:g}")
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=7)
     ax.set_title(f"{claim['id']}: {claim['claim'][:70]}", fontsize=8)
@@ -241,6 +264,8 @@ def expand(claim: dict, work: Path) -> list[tuple[str, str, Run, dict]]:
             label, scheme, extra = entry["label"], entry.get("scheme", "case"), tuple(entry.get("set", []))
             args.update(entry.get("metric_args", {}))
         for res in resolutions:
+            if "schemes" in res and label not in res["schemes"]:
+                continue  # a costly resolution run by the schemes it names only
             sets = tuple(r.get("set", [])) + extra + tuple(res["set"])
             key = run_key(r["model"], scheme, sets)
             out.append((label, str(res["n"]), Run(r["model"], scheme, sets, work / "runs" / key), args))
@@ -345,16 +370,24 @@ def main() -> int:
             verdict, ours = judge(c, figures) if "judge" in c else ("measured", "")
             png = out / f"{c['id']}.png"
             plot_claim(c, figures, png)
-            judged = c.get("judge", {}).get("scheme")
+            judged_label = judged_scheme(c)
             profile = None
-            for scheme, label, run, _ in plan[c["id"]]:
-                if scheme == judged and (run.dir / "profile.png").exists():
-                    profile = run.dir / "profile.png"  # the finest resolution, last
-            if profile:
-                shutil.copy(profile, out / f"{c['id']}-profile.png")
+            if "plot" in c["run"]:
+                # the claim's own figure (growth curves, profiles, maps) from its runs
+                finished = [(s_, l_, runs[r_.dir], a_) for s_, l_, r_, a_ in plan[c["id"]] if not runs[r_.dir].error]
+                profile = out / f"{c['id']}-profile.png"
+                try:
+                    PLOTS[c["run"]["plot"]](c, finished, profile)
+                except (KeyError, ValueError, IndexError) as e:
+                    print(f"  {c['id']}: plot {c['run']['plot']} failed: {e}", file=sys.stderr)
+                    profile = None
+            else:
+                for scheme, label, run, _ in plan[c["id"]]:
+                    if scheme == judged_label and (run.dir / "profile.png").exists():
+                        profile = run.dir / "profile.png"  # the finest resolution, last
+                if profile:
+                    shutil.copy(profile, out / f"{c['id']}-profile.png")
             # the command of the judged scheme's finest run (the first scheme's for a ratio)
-            j = c.get("judge", {})
-            judged_label = j.get("scheme") or (j.get("schemes") or [None])[0]
             first = next((run for s_, _, run, _ in reversed(plan[c["id"]]) if s_ == judged_label), plan[c["id"]][-1][2])
             row.update(
                 verdict=verdict,
@@ -454,12 +487,13 @@ def write_report(path: Path, rows: list[dict], a, seconds: float) -> None:
                 if r.get("note"):
                     o += [r["note"].strip(), ""]
                 if r.get("figures"):
-                    labels = list(next(iter(r["figures"].values())).keys())
+                    # every resolution any scheme ran (a costly one may be run by some only)
+                    labels = list(dict.fromkeys(l for series in r["figures"].values() for l in series))
                     head = [f"N = {l}" if l else r["metric"] for l in labels]
                     o.append("| scheme | " + " | ".join(head) + " |")
                     o.append("|---|" + "---|" * len(head))
                     for s, series in r["figures"].items():
-                        o.append(f"| {cell(s)} | " + " | ".join(cell(fmt(series[l])) for l in labels) + " |")
+                        o.append(f"| {cell(s)} | " + " | ".join(cell(fmt(series[l])) if l in series else "—" for l in labels) + " |")
                     o.append("")
                 if r.get("profile"):
                     o += [f"![{r['id']} profile]({r['profile']})", ""]
@@ -470,13 +504,15 @@ def write_report(path: Path, rows: list[dict], a, seconds: float) -> None:
 def ranking(rows: list[dict]) -> list[str]:
     """One line per measured test with several schemes: the schemes from best to worst."""
     o = ["## Schemes ranked per test", "",
-         "Best first by the test's metric at the finest resolution (ratios to an exact value: closest to 1 first); failed runs last.", "",
+         "Best first by the test's metric at the finest resolution all schemes ran (ratios to an exact value: closest to 1 first); failed runs last.", "",
          "| test | metric | ranking |", "|---|---|---|"]
     for r in rows:
         f = r.get("figures")
         if not f or len(f) < 2:
             continue
-        last = {s: list(series.values())[-1] for s, series in f.items()}
+        # the finest resolution every scheme ran (a costly one may be run by some only)
+        common = [l for l in next(iter(f.values())) if all(l in series for series in f.values())]
+        last = {s: series[common[-1]] if common else list(series.values())[-1] for s, series in f.items()}
         ok = [(v, s) for s, v in last.items() if not isinstance(v, str) and math.isfinite(v)]
         ideal = r.get("ideal")
         if ideal is not None:  # a ratio to the exact value: closest to it first

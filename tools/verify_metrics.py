@@ -35,6 +35,31 @@ def last_snapshot(run_dir: Path) -> dict[str, np.ndarray]:
     return {n: data[:, i] for i, n in enumerate(names)}
 
 
+def read_csv(path: Path) -> dict[str, np.ndarray]:
+    with open(path) as f:
+        rows = list(csv.reader(f))
+    names = [h.split(" [")[0] for h in rows[0]]
+    data = np.array(rows[1:], dtype=float).reshape(len(rows) - 1, len(names))
+    return {n: data[:, i] for i, n in enumerate(names)}
+
+
+def snapshots(run_dir: Path) -> list[tuple[float, Path]]:
+    """(time, CSV path) of every snapshot, times from snapshots.csv (the run's index of its
+    snapshots: number and time)."""
+    index = read_csv(run_dir / "snapshots.csv")
+    out = [(float(t), run_dir / f"snapshot_{int(i):05d}.csv") for i, t in zip(index["snapshot"], index["time"])]
+    out = [(t, p) for t, p in out if p.exists()]
+    if not out:
+        raise ValueError(f"{run_dir}: no CSV snapshot listed in snapshots.csv")
+    return out
+
+
+def series(run_dir: Path, fn) -> tuple[np.ndarray, np.ndarray]:
+    """fn(snapshot columns) at every snapshot: (times, values)."""
+    snaps = snapshots(run_dir)
+    return np.array([t for t, _ in snaps]), np.array([fn(read_csv(p)) for _, p in snaps])
+
+
 def diagnostics(run_dir: Path) -> dict[str, np.ndarray]:
     with open(run_dir / "diagnostics.csv") as f:
         rows = list(csv.reader(f))
@@ -172,3 +197,85 @@ def post_shock_density_ratio(run, args) -> float:
     """Post-shock density (mean over 0.3–0.8 r_s) over the exact one."""
     r = run.summary["radial"]
     return r["post_shock_density"] / r["post_shock_density_exact"]
+
+
+@metric
+def kinetic_energy_lost(run, args) -> float:
+    """1 − E_K(t_end)/E_K(0): the fraction of the kinetic energy a steady flow lost (Abel's
+    shear flow, 1 − F of his eq. 8)."""
+    return 1.0 - run.summary["last"]["kinetic_energy"] / run.summary["initial"]["kinetic_energy"]
+
+
+def shear_fit(s: dict[str, np.ndarray]) -> tuple[float, np.ndarray]:
+    """Least-squares fit of v_x = a cos 2πy + b sin 2πy + c: (amplitude, residuals)."""
+    y, vx = s["y"], s["vx"]
+    basis = np.stack([np.cos(2 * np.pi * y), np.sin(2 * np.pi * y), np.ones_like(y)], 1)
+    coef, *_ = np.linalg.lstsq(basis, vx, rcond=None)
+    return float(np.hypot(coef[0], coef[1])), vx - basis @ coef
+
+
+@metric
+def shear_profile_deviation(run, args) -> float:
+    """RMS departure of v_x(y) from its best-fitting cosine, over the cosine's amplitude, at
+    t_end. A Newtonian viscosity keeps the cosine (it only decays: Abel's eq. 7), so this
+    measures how non-Newtonian the scheme's dissipation is (Abel's Fig. A1: flat tops)."""
+    amp, res = shear_fit(last_snapshot(run.dir))
+    return float(np.sqrt(np.mean(res**2)) / amp)
+
+
+@metric
+def vy_rms(run, args) -> float:
+    """sqrt(⟨v_y²⟩) over all particles at t_end (Rosswog Eq. 111; zero in the exact flow of a
+    steady shear)."""
+    s = last_snapshot(run.dir)
+    return float(np.sqrt(np.mean(s["vy"] ** 2)))
+
+
+def binned(x: np.ndarray, q: np.ndarray, lo: float, hi: float, width: float) -> tuple[np.ndarray, np.ndarray]:
+    """(bin centres, mean of q per bin) over [lo, hi] in bins of `width` (NaN where empty)."""
+    edges = np.arange(lo, hi + 0.5 * width, width)
+    k = np.digitize(x, edges) - 1
+    means = np.array([q[k == i].mean() if np.any(k == i) else np.nan for i in range(len(edges) - 1)])
+    return 0.5 * (edges[1:] + edges[:-1]), means
+
+
+@metric
+def planar_shock_position_error(run, args) -> float:
+    """|y_s − y_exact| / y_exact for a planar shock moving up `axis` from a wall at 0: y_s is the
+    highest bin (width `bin`) whose mean density is at least `rho_mid` (midway between the pre-
+    and post-shock densities). The shearing Noh problem (CRKSPH §4.4.5): y_exact = t/3."""
+    s = last_snapshot(run.dir)
+    centres, rho = binned(s[args.get("axis", "y")], s["rho"], 0.0, args["length"], args["bin"])
+    behind = np.where(rho >= args["rho_mid"])[0]
+    if len(behind) == 0:
+        raise ValueError("no post-shock gas found")
+    return float(abs(centres[behind.max()] - args["exact"]) / args["exact"])
+
+
+def mcnally_mode(s: dict[str, np.ndarray]) -> float:
+    """The y-velocity mode amplitude of McNally, Lyra & Passy (2012) eqs 10–13 (λ = ½): sums
+    over particles with y′ = y below ½ and 1 − y above, weights d_i = h_i² (the CRKSPH paper's
+    reading for particles)."""
+    y = np.where(s["y"] < 0.5, s["y"], 1.0 - s["y"])
+    w = s["h"] ** 2 * np.exp(-4 * np.pi * np.abs(y - 0.25))
+    sn = np.sum(s["vy"] * w * np.sin(4 * np.pi * s["x"]))
+    cs = np.sum(s["vy"] * w * np.cos(4 * np.pi * s["x"]))
+    d = np.sum(w)
+    return float(2 * np.hypot(sn / d, cs / d))
+
+
+def growth_fit(t: np.ndarray, a: np.ndarray, window: tuple[float, float]) -> float:
+    """Least-squares slope of ln a(t) over t in [t0, t1]: the exponential growth rate."""
+    sel = (t >= window[0]) & (t <= window[1]) & (a > 0)
+    if sel.sum() < 3:
+        raise ValueError(f"fewer than 3 snapshots in the fit window {window}")
+    return float(np.polyfit(t[sel], np.log(a[sel]), 1)[0])
+
+
+@metric
+def kh_growth_rate_ratio(run, args) -> float:
+    """The fitted exponential growth rate of the KH mode amplitude (``mode``: "mcnally" or
+    "vy_rms") over ``window``, divided by the linear-theory rate ``sigma`` (tools/kh_linear.py)."""
+    fn = {"mcnally": mcnally_mode, "vy_rms": lambda s: float(np.sqrt(np.mean(s["vy"] ** 2)))}[args["mode"]]
+    t, a = series(run.dir, fn)
+    return growth_fit(t, a, tuple(args["window"])) / args["sigma"]

@@ -94,6 +94,9 @@ enum Command {
     /// memory, estimated without allocating) against the machine and the case's [limits].
     Check {
         case: PathBuf,
+        /// With this scheme preset instead of the case's, as for `run`
+        #[arg(long)]
+        scheme: Option<String>,
         /// Change a key of the case file first, as for `run`
         #[arg(long = "set", value_name = "KEY=VALUE")]
         sets: Vec<String>,
@@ -280,7 +283,12 @@ fn main() -> ExitCode {
             }
             ExitCode::SUCCESS
         }
-        Command::Check { case, sets, build } => match Case::load_with(&case, &sets) {
+        Command::Check {
+            case,
+            scheme,
+            sets,
+            build,
+        } => match Case::load_with(&case, scheme.as_deref(), &sets) {
             Ok(c) => {
                 if build {
                     let r = match c.dimension() {
@@ -321,11 +329,7 @@ fn main() -> ExitCode {
             if let Err(e) = set_threads(threads) {
                 return fail(2, e);
             }
-            let c = match Case::load_with(&case, &sets) {
-                Ok(c) => c,
-                Err(e) => return fail(2, e),
-            };
-            let c = match scheme.map(|s| c.with_scheme(&s)).unwrap_or(Ok(c)) {
+            let c = match Case::load_with(&case, scheme.as_deref(), &sets) {
                 Ok(c) => c,
                 Err(e) => return fail(2, e),
             };

@@ -116,7 +116,7 @@ fn one_line(s: &str) -> String {
 impl Case {
     /// Read and validate a case file.
     pub fn load(path: &Path) -> Result<Case, CaseError> {
-        Self::load_with(path, &[])
+        Self::load_with(path, None, &[])
     }
 
     /// Read a case file, set `key=value` overrides in it (`--set`), then validate it. A key is
@@ -124,16 +124,32 @@ impl Case {
     /// an index sets every entry of an array of tables (`region.*.spacing`). The value is a TOML
     /// value (`0.01`, `"crksph"`, `[1.0, 2.0]`). A key must already exist, unless its last
     /// segment is new in an existing table, so that a typo cannot pass unnoticed as a new table.
-    pub fn load_with(path: &Path, sets: &[String]) -> Result<Case, CaseError> {
+    ///
+    /// A `scheme` preset (`--scheme`) replaces the file's scheme first ([`Self::with_scheme`]),
+    /// and the overrides apply to the result: `--scheme crksph --set scheme.limiter=false`
+    /// runs CRKSPH without its limiter (the preset applied after the overrides would drop them).
+    pub fn load_with(
+        path: &Path,
+        scheme: Option<&str>,
+        sets: &[String],
+    ) -> Result<Case, CaseError> {
         let text = std::fs::read_to_string(path)
             .map_err(|e| CaseError(format!("{}: cannot read: {e}", path.display())))?;
         let at = |e: CaseError| CaseError(format!("{}: {}", path.display(), e.0));
-        if sets.is_empty() {
-            // parsed as written, so errors keep the file's line numbers
-            return Self::parse(&text).map_err(at);
-        }
-        let mut table: toml::Table =
-            toml::from_str(&text).map_err(|e| at(CaseError(one_line(e.message()))))?;
+        // parsed as written, so errors keep the file's line numbers
+        let mut table: toml::Table = match scheme {
+            None if sets.is_empty() => return Self::parse(&text).map_err(at),
+            None => toml::from_str(&text).map_err(|e| at(CaseError(one_line(e.message()))))?,
+            Some(name) => {
+                let case = Self::parse(&text).and_then(|c| c.with_scheme(name)).map_err(at)?;
+                if sets.is_empty() {
+                    return Ok(case);
+                }
+                toml::Table::try_from(&case).map_err(|e| {
+                    at(CaseError(format!("--scheme: cannot write the case back: {e}")))
+                })?
+            }
+        };
         for s in sets {
             overrides::apply(&mut table, s).map_err(at)?;
         }

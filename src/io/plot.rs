@@ -58,7 +58,7 @@ fn bounds(pts: &[(f64, f64)], other: &[(f64, f64)]) -> (f64, f64, f64, f64) {
             y1 = y1.max(y);
         }
     }
-    if !(y0 <= y1) {
+    if y0.is_nan() || y1.is_nan() || y0 > y1 {
         (y0, y1) = (0.0, 1.0);
     }
     let range = (y1 - y0).max(1e-12 * y1.abs().max(1.0));

@@ -189,7 +189,19 @@ impl Snapshots {
         if !self.formats.contains(&SnapshotFormat::Vtu) {
             self.written.push((sim.time, PathBuf::new()));
         }
+        self.write_index()?;
         self.write_pvd()
+    }
+
+    /// `snapshots.csv`: each snapshot's number and time, whatever the formats (the CSV
+    /// snapshots carry no time; scripts reading a time series from them need it).
+    fn write_index(&self) -> Result<(), RunError> {
+        let mut text = String::from("snapshot,time [s]\n");
+        for (i, (t, _)) in self.written.iter().enumerate() {
+            text += &format!("{i},{t:e}\n");
+        }
+        let path = self.dir.join("snapshots.csv");
+        std::fs::write(&path, text).map_err(|e| io_err(&path, e))
     }
 
     /// ParaView collection so the snapshots open as one time series.

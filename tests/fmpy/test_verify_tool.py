@@ -30,6 +30,13 @@ def test_judges_decide_against_their_bounds():
     # a value is the finest resolution's
     assert verify.judge(claim("value", scheme="a", max=0.06), figures)[0] == "reproduced"
     assert verify.judge(claim("ratio", schemes=["b", "a"], min=3.9, max=4.1), figures)[0] == "reproduced"
+    # several judges: reproduced only when every one passes
+    both = {"run": {"metric": "m"}, "judge": [{"kind": "value", "scheme": "a", "max": 0.06},
+                                              {"kind": "order", "scheme": "a", "min": 1.1}]}
+    verdict, text = verify.judge(both, figures)
+    assert verdict == "not reproduced" and "order 1.00" in text, text
+    both["judge"][1]["min"] = 0.9
+    assert verify.judge(both, figures)[0] == "reproduced"
     verdict, text = verify.judge(claim("value", scheme="c", max=1.0), figures)
     assert verdict == "not reproduced" and "unstable" in text
 
@@ -48,11 +55,15 @@ def test_every_measured_entry_names_a_valid_case():
         assert "run" in c or "test" in c, c["id"]
         if "run" not in c or c["run"]["model"] == "kernels":
             continue
+        metric = c["run"]["metric"]
+        assert metric in verify.METRICS or "." in metric or metric in ("vortex_l1", "wall_seconds"), f"{c['id']}: metric {metric}"
+        assert c["run"].get("plot", "shear_flow") in verify.PLOTS, f"{c['id']}: plot {c['run']['plot']}"
         for _, _, run, _ in verify.expand(c, ROOT / "target" / "verify-check"):
             cmd = [BIN, "check", run.model] + [a for s in run.sets for a in ("--set", s)]
             if run.scheme != "case":
                 assert run.scheme in {"standard", "rpsph", "rosswog-f1", "rosswog-f2", "rosswog-f3", "rosswog-f4",
                                       "crksph", "compsph", "compsph-cullen", "psph"}, run.scheme
+                cmd += ["--scheme", run.scheme]
             r = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
             assert r.returncode == 0, f"{c['id']}: {' '.join(cmd)}: {r.stderr}"
             checked += 1

@@ -1,0 +1,163 @@
+"""Figures of the verification suite that a claim draws from its own runs (tools/verify.py).
+
+A claim names one with `plot = "<name>"` (and `plot_args`) in its `[claim.run]`; the function
+gets the claim, its finished runs as (scheme label, resolution label, run, metric arguments),
+and the PNG path to write. The runs' own profile.png (shock tubes, Sedov, Noh, Gresho) needs no
+entry here: these are the tests the CLI has no exact-solution check for (growth curves,
+profiles against a steady state, maps).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from verify_metrics import diagnostics, last_snapshot, mcnally_mode, series
+
+PLOTS = {}
+
+
+def plot(fn):
+    PLOTS[fn.__name__] = fn
+    return fn
+
+
+def figure(ncols: int = 1, nrows: int = 1, size=(6.4, 4.2)):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(nrows, ncols, figsize=(size[0] * ncols, size[1] * nrows), squeeze=False)
+    return plt, fig, axes.ravel()
+
+
+def finish(plt, fig, claim: dict, png: Path, caption: str) -> None:
+    fig.suptitle(f"{claim['id']}: {caption}", fontsize=9)
+    fig.text(0.01, 0.005, "python tools/verify.py --only " + claim["id"], fontsize=6, color="grey")
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+    plt.close(fig)
+
+
+def claim_scheme(claim: dict) -> str | None:
+    """The scheme (or variant) the claim's first judge reads."""
+    j = claim.get("judge", [])
+    j = j if isinstance(j, dict) else (j or [{}])[0]
+    return j.get("scheme") or (j.get("schemes") or [None])[0]
+
+
+def finest(runs: list) -> dict[str, tuple]:
+    """Each scheme's last run (the finest resolution): {label: (resolution, run, args)}."""
+    out = {}
+    for scheme, res, run, args in runs:
+        out[scheme] = (res, run, args)
+    return out
+
+
+def styles(runs: list) -> tuple[dict, dict]:
+    """A colour per scheme and a line style per resolution, so curves of many runs stay apart."""
+    import matplotlib
+
+    cmap = matplotlib.colormaps["tab10"]
+    schemes = list(dict.fromkeys(s for s, _, _, _ in runs))
+    resolutions = list(dict.fromkeys(r for _, r, _, _ in runs))
+    dashes = ["-", "--", ":", "-."]
+    return ({s: cmap(i % 10) for i, s in enumerate(schemes)},
+            {r: dashes[i % len(dashes)] for i, r in enumerate(resolutions)})
+
+
+@plot
+def shear_flow(claim: dict, runs: list, png: Path) -> None:
+    """Abel's shear flow: E_K(t)/E_K(0) per scheme (every resolution), and v_x against y at
+    t_end binned in y (the finest resolution) against the initial cosine, which the inviscid
+    flow keeps and a Newtonian viscosity only scales."""
+    plt, fig, (ax_f, ax_v) = figure(2)
+    colour, style = styles(runs)
+    for scheme, res, run, _ in runs:
+        d = diagnostics(run.dir)
+        ax_f.plot(d["time"], d["kinetic"] / d["kinetic"][0], color=colour[scheme], ls=style[res], lw=1,
+                  label=f"{scheme} N={res}" if res else scheme)
+    ax_f.set_xlabel("t (sound crossings)")
+    ax_f.set_ylabel("F = E_K(t) / E_K(0)")
+    ax_f.legend(fontsize=6)
+    y_bins = np.linspace(0.0, 1.0, 51)
+    centres = 0.5 * (y_bins[1:] + y_bins[:-1])
+    for scheme, (res, run, _) in finest(runs).items():
+        s = last_snapshot(run.dir)
+        k = np.clip(np.digitize(s["y"], y_bins) - 1, 0, 49)
+        ax_v.plot(centres, [s["vx"][k == i].mean() for i in range(50)], ".-", ms=3, lw=0.8, color=colour[scheme],
+                  label=f"{scheme} N={res}" if res else scheme)
+    yy = np.linspace(0, 1, 200)
+    ax_v.plot(yy, 0.5 * np.cos(2 * np.pi * yy), "k--", lw=0.8, label="t = 0 (inviscid exact)")
+    ax_v.set_xlabel("y")
+    ax_v.set_ylabel("v_x at t_end, mean per bin of width 0.02")
+    ax_v.legend(fontsize=6)
+    finish(plt, fig, claim, png, "shear flow: kinetic energy kept, and the profile's shape at t_end")
+
+
+@plot
+def planar_noh(claim: dict, runs: list, png: Path) -> None:
+    """ρ, P and u against y for every particle of each scheme (finest resolution), with the
+    planar Noh solution: ρ = 4, P = 4/3, u = 1/2 behind the shock at y = t/3 (γ = 5/3, unit
+    inflow speed), the cold inflow (ρ = 1) ahead of it."""
+    args = claim["run"]["metric_args"]
+    ys, length = args["exact"], args["length"]
+    plt, fig, axes = figure(3, size=(4.6, 4.0))
+    for scheme, (res, run, _) in finest(runs).items():
+        s = last_snapshot(run.dir)
+        for ax, q in zip(axes, ("rho", "P", "u")):
+            ax.plot(s["y"], s[q], ".", ms=1.5, label=scheme)
+    y = np.array([0.0, ys, ys, length])
+    for ax, q, (behind, ahead), name in zip(
+        axes, ("rho", "P", "u"), ((4.0, 1.0), (4.0 / 3.0, 0.0), (0.5, 0.0)), ("density", "pressure", "specific internal energy")
+    ):
+        ax.plot(y, [behind, behind, ahead, ahead], "k-", lw=1.2, label="exact (planar Noh)")
+        ax.set_xlabel("y")
+        ax.set_ylabel(name)
+        ax.set_xlim(0, min(length, 3 * ys))
+    axes[0].legend(fontsize=6, markerscale=4)
+    finish(plt, fig, claim, png, "shearing Noh at t = 0.6: every particle against y")
+
+
+def density_map(ax, s: dict, title: str, quantity: str = "rho") -> None:
+    """The particles coloured by a field (a map at the particles' own positions)."""
+    sc = ax.scatter(s["x"], s["y"], c=s[quantity], s=0.3, cmap="viridis", linewidths=0, rasterized=True)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    ax.set_title(title, fontsize=8)
+    ax.figure.colorbar(sc, ax=ax, shrink=0.8, label=quantity)
+
+
+@plot
+def kh_growth(claim: dict, runs: list, png: Path) -> None:
+    """KH: the mode amplitude against t per scheme and resolution (log axis), the linear-theory
+    growth e^{σt} through the judged scheme's amplitude at the fit window's start, and the
+    density of the judged scheme's finest run at t_end."""
+    args = claim["run"]["metric_args"]
+    mode = {"mcnally": mcnally_mode, "vy_rms": lambda s: float(np.sqrt(np.mean(s["vy"] ** 2)))}[args["mode"]]
+    plt, fig, (ax_a, ax_m) = figure(2, size=(6.4, 5.0))
+    colour, style = styles(runs)
+    judged = claim_scheme(claim)
+    anchor = None
+    for scheme, res, run, _ in runs:
+        t, a = series(run.dir, mode)
+        ax_a.semilogy(t, a, color=colour[scheme], ls=style[res], lw=1, label=f"{scheme} N={res}" if res else scheme)
+        if scheme == judged:
+            anchor = (t, a)
+    t0, t1 = args["window"]
+    if anchor is not None:
+        t, a = anchor
+        a0 = float(np.interp(t0, t, a))
+        tt = np.linspace(t0, t[-1], 50)
+        ax_a.semilogy(tt, a0 * np.exp(args["sigma"] * (tt - t0)), "k--", lw=1.2, label=f"linear theory σ = {args['sigma']:g}")
+    ax_a.axvspan(t0, t1, color="0.9", zorder=0, label="fit window")
+    ax_a.set_xlabel("t")
+    ax_a.set_ylabel({"mcnally": "mode amplitude (McNally et al. eqs 10–13)", "vy_rms": "v_y,rms (Rosswog eq. 111)"}[args["mode"]])
+    ax_a.legend(fontsize=5, ncol=2)
+    best = finest([r for r in runs if r[0] == judged]).get(judged)
+    if best:
+        density_map(ax_m, last_snapshot(best[1].dir), f"{judged} N={best[0]}: density at t_end")
+    finish(plt, fig, claim, png, "KH growth against linear theory")
