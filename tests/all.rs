@@ -18,6 +18,7 @@ mod eos;
 mod fields;
 mod frame;
 mod glass;
+mod initial_states;
 mod kernel_choice;
 mod kernels;
 mod lattice;

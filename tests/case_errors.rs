@@ -220,7 +220,10 @@ fn scheme_preset_then_overrides_keeps_the_overrides() {
     use sphfmu::scheme::SchemeConfig;
     let models = concat!(env!("CARGO_MANIFEST_DIR"), "/models");
     let sod = std::path::Path::new(models).join("sod.toml");
-    let sets = ["scheme.limiter=false".to_string(), "kernel.eta=2.5".to_string()];
+    let sets = [
+        "scheme.limiter=false".to_string(),
+        "kernel.eta=2.5".to_string(),
+    ];
     let case = Case::load_with(&sod, Some("crksph"), &sets).unwrap();
     match &case.scheme {
         SchemeConfig::Crksph(p) => assert!(!p.limiter, "{p:?}"),

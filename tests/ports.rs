@@ -329,8 +329,16 @@ fn bad_ports_in_a_case_are_named() {
     // fixes them, and accepted with it
     let scheme = "name = \"standard\"\nalpha = 0.0\nbeta = 0.0\nviscosity = 0.1";
     check(scheme, "name = \"crksph\"", "scheme.limiter: crksph");
-    check(scheme, "name = \"rosswog-f1\"", "scheme.triggers: rosswog-f1");
-    check(scheme, "name = \"rosswog-f3\"", "scheme.triggers: rosswog-f3");
+    check(
+        scheme,
+        "name = \"rosswog-f1\"",
+        "scheme.triggers: rosswog-f1",
+    );
+    check(
+        scheme,
+        "name = \"rosswog-f3\"",
+        "scheme.triggers: rosswog-f3",
+    );
     for fixed in [
         "name = \"crksph\"\nlimiter = false",
         "name = \"crksph\"\norder = \"zeroth\"",

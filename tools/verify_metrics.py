@@ -279,3 +279,23 @@ def kh_growth_rate_ratio(run, args) -> float:
     fn = {"mcnally": mcnally_mode, "vy_rms": lambda s: float(np.sqrt(np.mean(s["vy"] ** 2)))}[args["mode"]]
     t, a = series(run.dir, fn)
     return growth_fit(t, a, tuple(args["window"])) / args["sigma"]
+
+
+def yee_exact(x: np.ndarray, y: np.ndarray, gamma: float = 1.4, beta: float = 5.0):
+    """The Yee vortex (steady): ρ, v_x, v_y at the positions (free stream ρ = P = T = 1, at rest)."""
+    r2 = x * x + y * y
+    t = 1 - (gamma - 1) * beta**2 / (8 * gamma * np.pi**2) * np.exp(1 - r2)
+    f = beta / (2 * np.pi) * np.exp((1 - r2) / 2)
+    return t ** (1 / (gamma - 1)), -f * y, f * x
+
+
+@metric
+def yee_error(run, args) -> float:
+    """The ``norm`` (L1, L2 or Linf) of ``quantity`` (rho, or v: |v − v_exact|) over the
+    particles inside r < ``r_max`` (the frozen rings beyond are left out) at t_end, against the
+    initial (steady) state (CRKSPH §4.4.2)."""
+    s = last_snapshot(run.dir)
+    rho, vx, vy = yee_exact(s["x"], s["y"])
+    inside = s["x"] ** 2 + s["y"] ** 2 < args.get("r_max", 5.0) ** 2
+    err = {"rho": np.abs(s["rho"] - rho), "v": np.hypot(s["vx"] - vx, s["vy"] - vy)}[args["quantity"]][inside]
+    return float({"L1": np.mean(err), "L2": np.sqrt(np.mean(err**2)), "Linf": np.max(err)}[args.get("norm", "L1")])

@@ -161,3 +161,44 @@ def kh_growth(claim: dict, runs: list, png: Path) -> None:
     if best:
         density_map(ax_m, last_snapshot(best[1].dir), f"{judged} N={best[0]}: density at t_end")
     finish(plt, fig, claim, png, "KH growth against linear theory")
+
+
+@plot
+def yee_profile(claim: dict, runs: list, png: Path) -> None:
+    """The Yee vortex at t_end: ρ and v_φ of every particle of the judged scheme's finest run
+    against r, with the exact (initial, steady) profiles; and every scheme's errors against
+    the ring count."""
+    from verify_metrics import yee_exact
+
+    plt, fig, axes = figure(3, size=(4.6, 4.0))
+    judged = claim_scheme(claim)
+    best = finest([r for r in runs if r[0] == judged]).get(judged)
+    rr = np.linspace(0, 5, 400)
+    rho_x, _, vy_x = yee_exact(rr, np.zeros_like(rr))
+    if best:
+        s = last_snapshot(best[1].dir)
+        r = np.hypot(s["x"], s["y"])
+        vphi = (s["x"] * s["vy"] - s["y"] * s["vx"]) / np.where(r > 0, r, 1)
+        axes[0].plot(r, s["rho"], ".", ms=1, label=f"{judged} N_r={best[0]}")
+        axes[1].plot(r, vphi, ".", ms=1, label=f"{judged} N_r={best[0]}")
+    axes[0].plot(rr, rho_x, "k-", lw=1, label="exact")
+    axes[1].plot(rr, vy_x, "k-", lw=1, label="exact")
+    for ax, name in zip(axes[:2], ("density", "v_φ")):
+        ax.set_xlabel("r")
+        ax.set_ylabel(name)
+        ax.set_xlim(0, 5)
+        ax.legend(fontsize=6, markerscale=5)
+    colour, _ = styles(runs)
+    metric = claim["run"]["metric"]
+    by_scheme: dict[str, list] = {}
+    for scheme, res, run, args in runs:
+        from verify_metrics import METRICS
+
+        by_scheme.setdefault(scheme, []).append((float(res), METRICS[metric](run, args)))
+    for scheme, pts in by_scheme.items():
+        pts.sort()
+        axes[2].loglog(*zip(*pts), "o-", color=colour[scheme], ms=3, lw=1, label=scheme)
+    axes[2].set_xlabel("N_r (rings)")
+    axes[2].set_ylabel(f"{metric} ({claim['run']['metric_args'].get('quantity')}, {claim['run']['metric_args'].get('norm', 'L1')})")
+    axes[2].legend(fontsize=6)
+    finish(plt, fig, claim, png, "Yee vortex at t = 8")

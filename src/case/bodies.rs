@@ -101,13 +101,17 @@ pub(super) fn add_bodies<const D: usize>(
         let thickness = crate::kernel::SUPPORT * h;
         let rho = b.density.unwrap_or(match case.eos {
             EosConfig::Tait { rho0, .. } => rho0,
-            _ => case.regions.first().map(|r| r.density).unwrap_or(1.0),
+            _ => case
+                .regions
+                .first()
+                .map(|r| case.reference_density(r))
+                .unwrap_or(1.0),
         });
         let u = case
             .regions
             .first()
             .map(|r| match (r.pressure, r.internal_energy) {
-                (Some(pr), _) => case.eos.internal_energy(r.density, pr),
+                (Some(pr), _) => case.eos.internal_energy(case.reference_density(r), pr),
                 (_, Some(u)) => u,
                 _ => 0.0,
             })

@@ -90,7 +90,8 @@ impl Case {
             (_, Some(m)) => {
                 // as ics::generate_particles: the volume holding m at the summed density
                 let unit = super::ics::volume_per_particle(r.lattice, d, 1.0);
-                (m / (r.density * self.density_factor(r.lattice) * unit)).powf(1.0 / d as f64)
+                (m / (self.reference_density(r) * self.density_factor(r.lattice) * unit))
+                    .powf(1.0 / d as f64)
             }
             _ => f64::NAN,
         }

@@ -90,6 +90,58 @@ pub struct FieldExpr {
     /// Named constants the expression may use (so `--set field.0.parameters.A=…` scans them).
     #[serde(default)]
     pub parameters: BTreeMap<String, f64>,
+    /// When it applies: to the generated particles (default), or after the first density
+    /// evaluation, where `rho` is the scheme's summed density (pressure and internal energy
+    /// only): a pressure exactly uniform over an irregular or equal-mass particle set
+    /// (Rosswog 2015 §7.1's "u from the computed density"; Abel 2011 §3.1's isobaric lattice).
+    #[serde(default)]
+    pub stage: Stage,
+}
+
+/// When a `[[field]]` entry applies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Stage {
+    /// To the particles as the regions placed them (ρ is the region's).
+    #[default]
+    Initial,
+    /// After the first evaluation, with ρ the scheme's own density estimate.
+    Density,
+}
+
+/// An expression of position alone with its constants: a region's `density_profile`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Formula {
+    pub expression: String,
+    #[serde(default)]
+    pub parameters: BTreeMap<String, f64>,
+}
+
+impl Formula {
+    /// Parse it for a `dim`-dimensional case; `key` names it in errors.
+    pub fn compile(&self, key: &str, dim: usize) -> Result<CompiledFormula, CaseError> {
+        let c = compile_expr(key, &self.expression, &self.parameters, dim, 4)?;
+        Ok(CompiledFormula { c, key: key.into() })
+    }
+}
+
+/// A parsed [`Formula`], evaluated at positions.
+pub struct CompiledFormula {
+    c: Compiled,
+    key: String,
+}
+
+impl CompiledFormula {
+    /// The value at x (coordinates beyond the case's dimension are 0).
+    pub fn at(&self, x: &[f64]) -> Result<f64, CaseError> {
+        let mut own = [0.0; 10];
+        own[..x.len()].copy_from_slice(x);
+        own[3] = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+        self.c
+            .eval(&own)
+            .map_err(|e| CaseError(format!("{}: at x = {x:?}: {e}", self.key)))
+    }
 }
 
 /// Names of the particle's own variables, in the order of [`Vars::values`].
@@ -103,21 +155,56 @@ struct Compiled {
     params: Vec<f64>,
 }
 
+impl Compiled {
+    /// The value with the particle's own variables `own` (in [`VARIABLES`] order).
+    fn eval(&self, own: &[f64; 10]) -> Result<f64, exmex::ExError> {
+        let args: Vec<f64> = self
+            .slots
+            .iter()
+            .map(|&s| {
+                if s < own.len() {
+                    own[s]
+                } else {
+                    self.params[s - own.len()]
+                }
+            })
+            .collect();
+        self.expr.eval(&args)
+    }
+}
+
 fn compile(i: usize, f: &FieldExpr, dim: usize) -> Result<Compiled, CaseError> {
-    let expr = exmex::parse::<f64>(&f.expression).map_err(|e| {
+    compile_expr(
+        &format!("field[{i}]"),
+        &f.expression,
+        &f.parameters,
+        dim,
+        VARIABLES.len(),
+    )
+}
+
+/// Parse `expression` (named `key` in errors) over the first `allowed` of [`VARIABLES`] and
+/// the `parameters`.
+fn compile_expr(
+    key: &str,
+    expression: &str,
+    parameters: &BTreeMap<String, f64>,
+    dim: usize,
+    allowed: usize,
+) -> Result<Compiled, CaseError> {
+    let expr = exmex::parse::<f64>(expression).map_err(|e| {
         CaseError(format!(
-            "field[{i}].expression: cannot parse {:?}: {e}",
-            f.expression
+            "{key}.expression: cannot parse {expression:?}: {e}"
         ))
     })?;
-    let params: Vec<(&String, &f64)> = f.parameters.iter().collect();
+    let params: Vec<(&String, &f64)> = parameters.iter().collect();
     let mut slots = Vec::new();
     for name in expr.var_names() {
-        let slot = match VARIABLES.iter().position(|v| v == name) {
+        let slot = match VARIABLES[..allowed].iter().position(|v| v == name) {
             // a coordinate the case does not have is an error, not a silent zero
             Some(k) if k < 3 && k >= dim => {
                 return Err(CaseError(format!(
-                    "field[{i}].expression: `{name}` is not a coordinate of a {dim}D case"
+                    "{key}.expression: `{name}` is not a coordinate of a {dim}D case"
                 )))
             }
             Some(k) => k,
@@ -125,8 +212,8 @@ fn compile(i: usize, f: &FieldExpr, dim: usize) -> Result<Compiled, CaseError> {
                 Some(k) => VARIABLES.len() + k,
                 None => {
                     return Err(CaseError(format!(
-                        "field[{i}].expression: unknown name `{name}` (allowed: {}, or a key of field[{i}].parameters)",
-                        VARIABLES.join(", ")
+                        "{key}.expression: unknown name `{name}` (allowed: {}, or a key of {key}.parameters)",
+                        VARIABLES[..allowed].join(", ")
                     )))
                 }
             },
@@ -136,7 +223,7 @@ fn compile(i: usize, f: &FieldExpr, dim: usize) -> Result<Compiled, CaseError> {
     for (name, v) in &params {
         if !v.is_finite() {
             return Err(CaseError(format!(
-                "field[{i}].parameters.{name}: must be finite, got {v}"
+                "{key}.parameters.{name}: must be finite, got {v}"
             )));
         }
     }
@@ -166,24 +253,83 @@ pub fn validate(fields: &[FieldExpr], dim: usize, regions: usize) -> Result<(), 
                 )));
             }
         }
+        if f.stage == Stage::Density {
+            if f.regions.is_some() {
+                return Err(CaseError(format!(
+                    "field[{i}].regions: a stage = \"density\" entry applies to every fluid particle"
+                )));
+            }
+            if !matches!(f.quantity, Quantity::Pressure | Quantity::InternalEnergy) {
+                return Err(CaseError(format!(
+                    "field[{i}].stage: \"density\" sets pressure or internal_energy only (from the scheme's density), not {:?}",
+                    f.quantity
+                )));
+            }
+            if f.combine == Combine::Add {
+                return Err(CaseError(format!(
+                    "field[{i}].combine: \"add\" is for stage = \"initial\" (a stage = \"density\" entry is re-applied until the density settles)"
+                )));
+            }
+        }
         compile(i, f, dim)?;
     }
     Ok(())
 }
 
-/// Apply the entries to freshly generated particles; `region_of[a]` is the region that
-/// placed particle a.
+/// `region_of` of a particle no region placed (a wall or port-buffer particle).
+pub const NO_REGION: usize = usize::MAX;
+
+/// Apply the density-stage entries to the fluid particles of an evaluated system (ρ the
+/// scheme's); true when there are any (the caller then evaluates again: with X = P^k volume
+/// elements the density depends on P).
+pub fn apply_after_density<const D: usize>(
+    fields: &[FieldExpr],
+    sys: &mut crate::system::System<D>,
+) -> Result<bool, CaseError> {
+    if !fields.iter().any(|f| f.stage == Stage::Density) {
+        return Ok(false);
+    }
+    let p = &sys.particles;
+    let region_of: Vec<usize> = (0..p.len())
+        .map(|a| {
+            if p.body[a] == 0 && p.port[a] == 0 {
+                0
+            } else {
+                NO_REGION
+            }
+        })
+        .collect();
+    let domain = sys.domain;
+    apply(
+        fields,
+        Stage::Density,
+        &mut sys.particles,
+        &region_of,
+        &sys.eos,
+        &domain,
+    )?;
+    Ok(true)
+}
+
+/// Apply the entries of `stage` to the particles; `region_of[a]` is the region that placed
+/// particle a (entries apply to particles with a region only: not to walls or port buffers).
 pub fn apply<const D: usize>(
     fields: &[FieldExpr],
+    stage: Stage,
     p: &mut Particles<D>,
     region_of: &[usize],
     eos: &EosConfig,
     domain: &Domain<D>,
 ) -> Result<(), CaseError> {
     for (i, f) in fields.iter().enumerate() {
+        if f.stage != stage {
+            continue;
+        }
         let c = compile(i, f, D)?;
-        let mut args = vec![0.0; c.slots.len()];
         for (a, region) in region_of.iter().enumerate() {
+            if *region == NO_REGION {
+                continue;
+            }
             if let Some(rs) = &f.regions {
                 if !rs.contains(region) {
                     continue;
@@ -200,14 +346,7 @@ pub fn apply<const D: usize>(
             own[4] = p.rho[a];
             own[5] = pressure;
             own[6] = p.u[a];
-            for (arg, &s) in args.iter_mut().zip(&c.slots) {
-                *arg = if s < own.len() {
-                    own[s]
-                } else {
-                    c.params[s - own.len()]
-                };
-            }
-            let value = c.expr.eval(&args).map_err(|e| {
+            let value = c.eval(&own).map_err(|e| {
                 CaseError(format!(
                     "field[{i}].expression: at x = {:?}: {e}",
                     x.as_slice()

@@ -25,13 +25,133 @@ impl SplitMix64 {
     }
 }
 
-/// Volume per particle of a lattice with nearest-neighbour spacing a.
+/// Volume per particle of a lattice with nearest-neighbour spacing a (rings: Δr², the mean
+/// over their annuli).
 pub(super) fn volume_per_particle(lattice: Lattice, d: usize, a: f64) -> f64 {
     match (lattice, d) {
-        (_, 1) | (Lattice::Cubic, _) => a.powi(d as i32),
-        (Lattice::Hexagonal, 2) => 0.5 * 3f64.sqrt() * a * a,
-        (Lattice::Hexagonal, _) => a * a * a / 2f64.sqrt(),
+        (_, 1) | (Lattice::Cubic | Lattice::Rings, _) => a.powi(d as i32),
+        (Lattice::Hexagonal | Lattice::QuasiHexagonal, 2) => 0.5 * 3f64.sqrt() * a * a,
+        (Lattice::Hexagonal | Lattice::QuasiHexagonal, _) => a * a * a / 2f64.sqrt(),
     }
+}
+
+impl Case {
+    /// A region's density where one number is needed (its `density`, or the mean of its
+    /// `density_profile` over its box: the particle count of an equal-mass lattice, the
+    /// default wall density). NaN when the profile does not evaluate (validation says why).
+    pub(crate) fn reference_density(&self, r: &Region) -> f64 {
+        if let Some(rho) = r.density {
+            return rho;
+        }
+        let d = self.case.dimension;
+        let Some(Ok(f)) = r
+            .density_profile
+            .as_ref()
+            .map(|f| f.compile("density_profile", d))
+        else {
+            return f64::NAN;
+        };
+        let (lo, hi) = self.region_box(r);
+        const N: usize = 32;
+        let mut sum = 0.0;
+        let total = N.pow(d as u32);
+        for lin in 0..total {
+            let mut x = vec![0.0; d];
+            let mut rest = lin;
+            for k in 0..d {
+                x[k] = lo[k] + (hi[k] - lo[k]) * ((rest % N) as f64 + 0.5) / N as f64;
+                rest /= N;
+            }
+            sum += f.at(&x).unwrap_or(f64::NAN);
+        }
+        sum / total as f64
+    }
+}
+
+/// Concentric rings about `c` out to `radius`, Δr = `dr` apart: ring i at (i + ½)Δr holds
+/// max(1, round(2πr/Δr)) points, every other ring turned by half a step; each point's volume
+/// is its share of the annulus, 2πrΔr/n (Frontiere, Raskin & Owen (2017) §4.4.2).
+fn ring_points<const D: usize>(c: &[f64], radius: f64, dr: f64) -> Vec<(Vector<D>, f64)> {
+    let rings = (radius / dr).round().max(1.0) as usize;
+    let mut out = Vec::new();
+    for i in 0..rings {
+        let r = (i as f64 + 0.5) * dr;
+        let n = (2.0 * std::f64::consts::PI * r / dr).round().max(1.0) as usize;
+        let vol = 2.0 * std::f64::consts::PI * r * dr / n as f64;
+        let turn = if i % 2 == 1 { 0.5 } else { 0.0 };
+        for j in 0..n {
+            let phi = 2.0 * std::f64::consts::PI * (j as f64 + turn) / n as f64;
+            let mut x = Vector::<D>::zeros();
+            x[0] = c[0] + r * phi.cos();
+            x[1] = c[1] + r * phi.sin();
+            out.push((x, vol));
+        }
+    }
+    out
+}
+
+/// Rosswog (2015) §7.7's equal-mass "quasi-close-packed" lattice in the box [lo, hi]:
+/// hexagonal rows along x, n_j = round(L_x / 2r_s(y_j)) evenly spaced points in row j
+/// (r_s = √(m/(2√3 ρ)), every other row shifted by half its spacing). The row pitch is
+/// m/(ρ Δx_j) at the middle of the pitch, so each row's area per particle is m/ρ exactly (the
+/// paper's √3 r_s, corrected for n_j being a whole number: within 1/(2n_j)). The rows are then
+/// stretched in y so the stack closes the box (a periodic tiling; the stretch is the last
+/// row's mismatch, below one pitch). Each point's volume is its row's share, Δx_j × pitch.
+fn quasi_hexagonal_points<const D: usize>(
+    lo: &[f64],
+    hi: &[f64],
+    m: f64,
+    rho: &dyn Fn(f64) -> Result<f64, CaseError>,
+) -> Result<Vec<(Vector<D>, f64)>, CaseError> {
+    let lx = hi[0] - lo[0];
+    let r_s = |y: f64| -> Result<f64, CaseError> { Ok((m / (2.0 * 3f64.sqrt() * rho(y)?)).sqrt()) };
+    let row = |y: f64| -> Result<(usize, f64), CaseError> {
+        let n = (lx / (2.0 * r_s(y)?)).round().max(1.0) as usize;
+        Ok((n, lx / n as f64))
+    };
+    // the pitch above a row at y with spacing dx: m/(ρ dx) with ρ at its middle
+    let pitch = |y: f64, dx: f64| -> Result<f64, CaseError> {
+        let mut p = m / (rho(y)? * dx);
+        for _ in 0..3 {
+            p = m / (rho(y + 0.5 * p)? * dx);
+        }
+        Ok(p)
+    };
+    // (y, n, dx, pitch) of each row; the first half a pitch above lo, as a lattice's cells
+    let (n0, dx0) = row(lo[1])?;
+    let mut rows = vec![(lo[1] + 0.5 * pitch(lo[1], dx0)?, n0, dx0, 0.0)];
+    loop {
+        let (y, n, dx, _) = *rows.last().expect("one row");
+        let p = pitch(y, dx)?;
+        rows.last_mut().expect("one row").3 = p;
+        // the next row, and the half pitch above it, must fit below hi (as a cell)
+        let next = y + p;
+        let (n1, dx1) = row(next)?;
+        let p1 = pitch(next, dx1)?;
+        if next + 0.5 * p1 > hi[1] + 0.25 * p1 {
+            break;
+        }
+        let _ = n;
+        rows.push((next, n1, dx1, p1));
+        if rows.len() > 1 << 24 {
+            return Err(CaseError("region: the quasi-hexagonal rows do not fit (density_profile too large for particle_mass)".into()));
+        }
+    }
+    // stretch: the stack from lo to the last row's upper half pitch becomes [lo, hi]
+    let (last, _, _, p_last) = *rows.last().expect("one row");
+    let scale = (hi[1] - lo[1]) / (last + 0.5 * p_last - lo[1]);
+    let mut out = Vec::new();
+    for (j, &(y0, n, dx, p)) in rows.iter().enumerate() {
+        let y = lo[1] + (y0 - lo[1]) * scale;
+        let shift = if j % 2 == 1 { 0.5 } else { 0.0 };
+        for i in 0..n {
+            let mut x = Vector::<D>::zeros();
+            x[0] = lo[0] + (i as f64 + 0.25 + shift) * dx;
+            x[1] = y;
+            out.push((x, dx * p * scale));
+        }
+    }
+    Ok(out)
 }
 
 /// Points of a lattice filling the box [lo, hi], spacings adjusted so the box holds an
@@ -122,6 +242,11 @@ pub fn lattice_density_factor<const D: usize>(
     kernel: &crate::kernel::DimKernel<D>,
     eta: f64,
 ) -> f64 {
+    if matches!(lattice, Lattice::Rings | Lattice::QuasiHexagonal) {
+        // no periodic tile: their sums are irregular (set P from the summed density, a
+        // `[[field]] stage = "density"` entry, where it matters)
+        return 1.0;
+    }
     // lattice periods per axis for spacing 1 (hexagonal: rows and layers in pairs)
     let period: [f64; 3] = match (lattice, D) {
         (_, 1) | (Lattice::Cubic, _) => [1.0; 3],
@@ -184,8 +309,7 @@ struct State<const D: usize> {
     vel: Vector<D>,
 }
 
-fn state_of<const D: usize>(case: &Case, r: &Region, x: &Vector<D>) -> State<D> {
-    let rho = r.density;
+fn state_of<const D: usize>(case: &Case, r: &Region, x: &Vector<D>, rho: f64) -> State<D> {
     let u = match (r.pressure, r.internal_energy) {
         (Some(p), _) => case.eos.internal_energy(rho, p),
         (_, Some(u)) => u,
@@ -219,7 +343,7 @@ fn state_of<const D: usize>(case: &Case, r: &Region, x: &Vector<D>) -> State<D> 
             // depth below the highest point of the region's box, measured along g
             let top: f64 = (0..D).map(|k| (g[k] * lo[k]).min(g[k] * hi[k])).sum();
             let depth = (g.dot(x) - top) / g.norm().max(1e-300);
-            let p = p0 + r.density * g.norm() * depth.max(0.0);
+            let p = p0 + rho * g.norm() * depth.max(0.0);
             rho = case.eos.density_at(p, u).unwrap_or(rho);
             u = match case.eos {
                 crate::eos::EosConfig::Tait { .. } | crate::eos::EosConfig::Isothermal { .. } => u,
@@ -252,6 +376,35 @@ pub fn generate_particles<const D: usize>(
     let mut p = Particles::<D>::default();
     let mut spacing_of = Vec::new();
     let mut region_of = Vec::new();
+    let profiles = case
+        .regions
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            r.density_profile
+                .as_ref()
+                .map(|f| f.compile(&format!("region[{i}].density_profile"), D))
+                .transpose()
+        })
+        .collect::<Result<Vec<_>, CaseError>>()?;
+    let density_at = |ri: usize, x: &Vector<D>| -> Result<f64, CaseError> {
+        let r = &case.regions[ri];
+        match (&profiles[ri], r.density) {
+            (Some(f), _) => {
+                let rho = f.at(x.as_slice())?;
+                if rho.is_finite() && rho > 0.0 {
+                    Ok(rho)
+                } else {
+                    Err(CaseError(format!(
+                        "region[{ri}].density_profile: gives {rho} at x = {:?}; it must be finite and > 0",
+                        x.as_slice()
+                    )))
+                }
+            }
+            (None, Some(rho)) => Ok(rho),
+            (None, None) => unreachable!("validated: density or density_profile"),
+        }
+    };
     for (ri, r) in case.regions.iter().enumerate() {
         let (mut lo, mut hi) = case.region_box(r);
         // Clip to the domain on bounded axes.
@@ -265,30 +418,52 @@ pub fn generate_particles<const D: usize>(
             Some(k) if case.glass.is_none() => lattice_density_factor(r.lattice, k, eta),
             _ => 1.0,
         };
-        let a = match (r.spacing, r.particle_mass) {
-            (Some(s), _) => s,
-            (_, Some(m)) => {
-                // spacing whose volume per particle holds mass m at density ρ (as summed)
-                let unit = volume_per_particle(r.lattice, D, 1.0);
-                (m / (r.density * factor * unit)).powf(1.0 / D as f64)
+        // (point, its volume) and whether the masses are equal (else ρ × volume)
+        let (pts, equal_mass): (Vec<(Vector<D>, f64)>, Option<f64>) = match r.lattice {
+            Lattice::Rings => {
+                let c = r.center.as_deref().expect("validated: rings need a sphere");
+                let dr = r.spacing.expect("validated: rings need a spacing");
+                (ring_points::<D>(c, r.radius.expect("validated"), dr), None)
             }
-            _ => unreachable!("validated"),
+            Lattice::QuasiHexagonal => {
+                let m = r
+                    .particle_mass
+                    .expect("validated: quasi-hexagonal needs particle_mass");
+                let rho_y = |y: f64| {
+                    let mut x = Vector::<D>::zeros();
+                    x[0] = 0.5 * (lo[0] + hi[0]);
+                    x[1] = y;
+                    density_at(ri, &x)
+                };
+                (quasi_hexagonal_points::<D>(&lo, &hi, m, &rho_y)?, Some(m))
+            }
+            _ => {
+                let reference = case.reference_density(r);
+                let a = match (r.spacing, r.particle_mass) {
+                    (Some(s), _) => s,
+                    (_, Some(m)) => {
+                        // spacing whose volume per particle holds mass m at density ρ (as summed)
+                        let unit = volume_per_particle(r.lattice, D, 1.0);
+                        (m / (reference * factor * unit)).powf(1.0 / D as f64)
+                    }
+                    _ => unreachable!("validated"),
+                };
+                let (pts, vol) = lattice_points::<D>(r.lattice, &lo, &hi, a);
+                (pts.into_iter().map(|x| (x, vol)).collect(), None)
+            }
         };
-        let (pts, vol) = lattice_points::<D>(r.lattice, &lo, &hi, a);
-        let mass = r.density * vol / factor;
-        let h = eta * vol.powf(1.0 / D as f64);
-        for x in pts {
+        for (x, vol) in pts {
             if region_at(case, &x) != Some(ri) {
                 continue;
             }
-            let s = state_of(case, r, &x);
-            // equal volumes: a hydrostatic region's masses follow its density
-            let m = if r.hydrostatic {
-                s.rho * vol / factor
-            } else {
-                mass
-            };
+            let s = state_of(case, r, &x, density_at(ri, &x)?);
+            // equal volumes (masses follow the density, as summed) unless the lattice holds
+            // equal masses
+            let m = equal_mass.unwrap_or(s.rho * vol / factor);
+            let h = eta * vol.powf(1.0 / D as f64);
             p.push(m, x, s.vel, s.u, s.rho, h, r.material);
+            let last = p.len() - 1;
+            p.frozen[last] = r.frozen;
             spacing_of.push(vol.powf(1.0 / D as f64));
             region_of.push(ri);
         }
@@ -320,8 +495,8 @@ pub fn generate_particles<const D: usize>(
                 continue;
             }
             let (sl, sr) = (
-                state_of(case, &case.regions[il], &x),
-                state_of(case, &case.regions[ir], &x),
+                state_of(case, &case.regions[il], &x, density_at(il, &x)?),
+                state_of(case, &case.regions[ir], &x, density_at(ir, &x)?),
             );
             let w = 1.0 / (1.0 + (-(x[f.axis] - f.position) / f.width).exp());
             let rho = sl.rho + (sr.rho - sl.rho) * w;
@@ -338,7 +513,7 @@ pub fn generate_particles<const D: usize>(
     let margin = case.domain.frozen_margin;
     if margin > 0.0 {
         for (x, f) in p.pos.iter().zip(p.frozen.iter_mut()) {
-            *f = (0..D).any(|k| {
+            *f |= (0..D).any(|k| {
                 domain.kind[k] != crate::domain::BoundaryKind::Periodic
                     && (x[k] - domain.lo[k] < margin || domain.hi[k] - x[k] < margin)
             });
@@ -370,7 +545,14 @@ pub fn generate_particles<const D: usize>(
             domain.enforce(x, &mut v);
         }
     }
-    super::fields::apply(&case.fields, &mut p, &region_of, &case.eos, domain)?;
+    super::fields::apply(
+        &case.fields,
+        super::fields::Stage::Initial,
+        &mut p,
+        &region_of,
+        &case.eos,
+        domain,
+    )?;
     let bodies = if bodies_later {
         // align the walls with the first region's lattice (cell centres from its lower corner)
         let lo0 = case.regions.first().map(|r| case.region_box(r).0);

@@ -119,7 +119,7 @@ impl Case {
             .iter()
             .map(|r| {
                 r.spacing.unwrap_or_else(|| {
-                    (r.particle_mass.unwrap_or(0.0) / r.density)
+                    (r.particle_mass.unwrap_or(0.0) / self.reference_density(r))
                         .powf(1.0 / self.case.dimension as f64)
                 })
             })

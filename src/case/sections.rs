@@ -120,6 +120,15 @@ pub enum Lattice {
     Cubic,
     /// Hexagonal close packing in 2D; HCP (ABAB stacking of hexagonal layers) in 3D.
     Hexagonal,
+    /// 2D, `shape = "sphere"`: concentric rings Δr = `spacing` apart about `center`, ring i at
+    /// (i + ½)Δr with round(2πr/Δr) points, masses ρ × the annulus area shared equally (the
+    /// Yee vortex's set-up, Frontiere, Raskin & Owen (2017) §4.4.2).
+    Rings,
+    /// 2D, equal masses (`particle_mass`) in hexagonal rows along x whose spacing follows
+    /// `density_profile` (a function of y): row j + 1 sits √3 r_s(y_j) above row j with
+    /// round(L_x / 2r_s(y_j)) particles, r_s = √(m / (2√3 ρ)) (Rosswog (2015) §7.7's
+    /// "quasi-close-packed" lattice; the rows are stretched to close the box).
+    QuasiHexagonal,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -147,7 +156,16 @@ pub struct Region {
     /// Nearest-neighbour spacing; exactly one of `spacing` and `particle_mass`.
     pub spacing: Option<f64>,
     pub particle_mass: Option<f64>,
-    pub density: f64,
+    /// ρ (exactly one of `density` and `density_profile`).
+    pub density: Option<f64>,
+    /// ρ as an expression of position (`x`, `y`, `z`, `r` and its `parameters`). With
+    /// `lattice = "quasi-hexagonal"` it places the rows (equal masses); with the other lattices
+    /// the masses follow it (equal volumes).
+    pub density_profile: Option<super::fields::Formula>,
+    /// The region's particles never move: they keep their initial state and take part in
+    /// every sum (ghost layers held at the initial state, e.g. the Yee vortex's outer rings).
+    #[serde(default)]
+    pub frozen: bool,
     /// Exactly one of `pressure` and `internal_energy`.
     pub pressure: Option<f64>,
     pub internal_energy: Option<f64>,

@@ -244,7 +244,36 @@ impl Case {
                 )))
             }
         }
-        pos("density", r.density)?;
+        match (r.density, &r.density_profile) {
+            (Some(rho), None) => pos("density", rho)?,
+            (None, Some(f)) => {
+                f.compile(&key("density_profile"), self.case.dimension)?;
+            }
+            _ => {
+                return Err(CaseError(format!(
+                    "{}: give exactly one of density and density_profile",
+                    key("density")
+                )))
+            }
+        }
+        let d = self.case.dimension;
+        match r.lattice {
+            Lattice::Rings if d != 2 || r.shape != Shape::Sphere || r.spacing.is_none() => {
+                return Err(CaseError(format!(
+                    "{}: \"rings\" is a 2D lattice of a shape = \"sphere\" region with a spacing (Δr)",
+                    key("lattice")
+                )))
+            }
+            Lattice::QuasiHexagonal
+                if d != 2 || r.shape != Shape::Box || r.particle_mass.is_none() =>
+            {
+                return Err(CaseError(format!(
+                    "{}: \"quasi-hexagonal\" is a 2D lattice of equal masses: a shape = \"box\" region with particle_mass",
+                    key("lattice")
+                )))
+            }
+            _ => {}
+        }
         match (r.pressure, r.internal_energy) {
             (Some(p), None) => {
                 if !(p.is_finite() && p >= 0.0) {
