@@ -231,14 +231,10 @@ fn bad_lattices_and_profiles_are_named() {
         e.contains("field[0].stage: \"density\" sets pressure or internal_energy only"),
         "{e}"
     );
-    let e = Case::parse(
-        &rings_case("")
-            .replace("dimension = 2", "dimension = 2")
-            .replace(
-                "shape = \"sphere\"\ncenter = [0.0, 0.0]\nradius = 1.0\n",
-                "",
-            ),
-    )
+    let e = Case::parse(&rings_case("").replace(
+        "shape = \"sphere\"\ncenter = [0.0, 0.0]\nradius = 1.0\n",
+        "",
+    ))
     .unwrap_err()
     .0;
     assert!(
