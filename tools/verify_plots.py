@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from verify_metrics import diagnostics, last_snapshot, mcnally_mode, series
+from verify_metrics import diagnostics, kh_mode, last_snapshot, series
 
 PLOTS = {}
 
@@ -123,7 +123,7 @@ def planar_noh(claim: dict, runs: list, png: Path) -> None:
 
 def density_map(ax, s: dict, title: str, quantity: str = "rho") -> None:
     """The particles coloured by a field (a map at the particles' own positions)."""
-    sc = ax.scatter(s["x"], s["y"], c=s[quantity], s=0.3, cmap="viridis", linewidths=0, rasterized=True)
+    sc = ax.scatter(s["x"], s["y"], c=s[quantity], s=max(0.3, 2e4 / len(s["x"])), cmap="viridis", linewidths=0, rasterized=True)
     ax.set_aspect("equal")
     ax.set_xlabel("x")
     ax.set_ylabel("y")
@@ -137,7 +137,7 @@ def kh_growth(claim: dict, runs: list, png: Path) -> None:
     growth e^{σt} through the judged scheme's amplitude at the fit window's start, and the
     density of the judged scheme's finest run at t_end."""
     args = claim["run"]["metric_args"]
-    mode = {"mcnally": mcnally_mode, "vy_rms": lambda s: float(np.sqrt(np.mean(s["vy"] ** 2)))}[args["mode"]]
+    mode = kh_mode(args)
     plt, fig, (ax_a, ax_m) = figure(2, size=(6.4, 5.0))
     colour, style = styles(runs)
     judged = claim_scheme(claim)

@@ -76,6 +76,10 @@ pub struct RosswogParams {
     /// Floor of K (Eq. 82), 0 by default.
     pub k_min: f64,
     pub signal_velocity: SignalVelocity,
+    /// Until this time K = `k_constant` everywhere and the triggers only watch (Rosswog
+    /// (2015) §7.7.1 starts the KH runs with "K_a = 1 for t < 0.5"); 0: triggered from the
+    /// start.
+    pub k_constant_until: f64,
 }
 
 /// The four formulations F1–F4 the paper compares.
@@ -100,6 +104,7 @@ impl Preset {
             chi: 2.0,
             k_min: 0.0,
             signal_velocity: SignalVelocity::Galilean,
+            k_constant_until: 0.0,
         };
         match self {
             Preset::F1 => base,
@@ -143,6 +148,7 @@ pub struct RosswogOverrides {
     pub chi: Option<f64>,
     pub k_min: Option<f64>,
     pub signal_velocity: Option<SignalVelocity>,
+    pub k_constant_until: Option<f64>,
 }
 
 impl RosswogOverrides {
@@ -159,6 +165,7 @@ impl RosswogOverrides {
             chi: self.chi.unwrap_or(b.chi),
             k_min: self.k_min.unwrap_or(b.k_min),
             signal_velocity: self.signal_velocity.unwrap_or(b.signal_velocity),
+            k_constant_until: self.k_constant_until.unwrap_or(b.k_constant_until),
         }
     }
 
@@ -180,6 +187,12 @@ impl RosswogOverrides {
             ));
         }
         check_range("scheme.k_min", p.k_min, 0.0, p.k_max)?;
+        if !(p.k_constant_until.is_finite() && p.k_constant_until >= 0.0) {
+            return Err(format!(
+                "scheme.k_constant_until: must be a finite time ≥ 0, got {}",
+                p.k_constant_until
+            ));
+        }
         Ok(())
     }
 }
@@ -350,7 +363,7 @@ impl<const D: usize> Scheme<D> for Rosswog {
         self.prev_div_slot = sys.particles.add_scalar_field(0.0);
         // Pressures of the initial condition seed X = P^k.
         sys.update_eos();
-        let k0 = if self.params.triggers {
+        let k0 = if self.params.triggers && self.params.k_constant_until <= 0.0 {
             self.params.k_min
         } else {
             self.params.k_constant

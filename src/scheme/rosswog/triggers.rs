@@ -106,7 +106,12 @@ pub fn update<const D: usize>(
             k_des.max(decayed).max(prm.k_min)
         })
         .collect();
-    p.alpha = new_k;
+    // before `k_constant_until` the triggers watch (∇·v history) but K stays constant
+    p.alpha = if sys.time < prm.k_constant_until {
+        vec![prm.k_constant; n]
+    } else {
+        new_k
+    };
     let d = p.div_v.clone();
     p.extra_scalars[prev_slot] = d;
 }
