@@ -358,7 +358,8 @@ def main() -> int:
             for scheme, label, run, args in plan[c["id"]]:
                 run = runs[run.dir]
                 cost += run.seconds
-                if run.error:
+                m = c["run"]["metric"]
+                if run.error and not getattr(METRICS.get(m), "on_failure", False):
                     val: float | str = run.error
                 else:
                     try:

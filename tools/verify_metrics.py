@@ -264,15 +264,25 @@ def mcnally_mode(s: dict[str, np.ndarray], k: float = 4 * np.pi) -> float:
     return float(2 * np.hypot(sn / d, cs / d))
 
 
-def kh_mode(args: dict):
-    """The KH amplitude a claim measures: "mcnally" (eqs 10–13 at wavenumber ``k``, default 4π)
-    or "vy_rms" (Rosswog eq. 111)."""
+def band_mode(s: dict[str, np.ndarray], k: float, y0: float, band: float) -> float:
+    """The amplitude of the v_y mode exp(ikx) over the particles within ``band`` of y = y0 (an
+    RT interface): 2|Σ v_y e^{ikx}| / N."""
+    sel = np.abs(s["y"] - y0) < band
+    return float(2 * abs(np.sum(s["vy"][sel] * np.exp(1j * k * s["x"][sel]))) / max(sel.sum(), 1))
+
+
+def instability_mode(args: dict):
+    """The amplitude a KH or RT claim measures: "mcnally" (McNally's eqs 10–13 at wavenumber
+    ``k``, default 4π), "vy_rms" (Rosswog eq. 111) or "band" (the exp(ikx) mode of v_y within
+    ``band`` of ``y0``)."""
     if args["mode"] == "mcnally":
         k = args.get("k", 4 * np.pi)
         return lambda s: mcnally_mode(s, k)
     if args["mode"] == "vy_rms":
         return lambda s: float(np.sqrt(np.mean(s["vy"] ** 2)))
-    raise ValueError(f"unknown KH mode {args['mode']!r}")
+    if args["mode"] == "band":
+        return lambda s: band_mode(s, args["k"], args["y0"], args["band"])
+    raise ValueError(f"unknown mode {args['mode']!r}")
 
 
 def growth_fit(t: np.ndarray, a: np.ndarray, window: tuple[float, float]) -> float:
@@ -284,11 +294,20 @@ def growth_fit(t: np.ndarray, a: np.ndarray, window: tuple[float, float]) -> flo
 
 
 @metric
-def kh_growth_rate_ratio(run, args) -> float:
-    """The fitted exponential growth rate of the KH mode amplitude (``mode``: "mcnally" or
-    "vy_rms") over ``window``, divided by the linear-theory rate ``sigma`` (tools/kh_linear.py)."""
-    t, a = series(run.dir, kh_mode(args))
+def growth_rate_ratio(run, args) -> float:
+    """The fitted exponential growth rate of an instability's amplitude (``mode``, see
+    `instability_mode`) over ``window``, divided by the linear-theory rate ``sigma``
+    (tools/kh_linear.py, tools/rt_linear.py)."""
+    t, a = series(run.dir, instability_mode(args))
     return growth_fit(t, a, tuple(args["window"])) / args["sigma"]
+
+
+@metric
+def growth_factor(run, args) -> float:
+    """The amplitude at t_end over the amplitude at t = 0 (``mode`` as `growth_rate_ratio`):
+    above 1 the seed grew, below 1 it was damped or only oscillated."""
+    t, a = series(run.dir, instability_mode(args))
+    return float(a[-1] / a[0])
 
 
 def yee_exact(x: np.ndarray, y: np.ndarray, gamma: float = 1.4, beta: float = 5.0):
@@ -309,3 +328,36 @@ def yee_error(run, args) -> float:
     inside = s["x"] ** 2 + s["y"] ** 2 < args.get("r_max", 5.0) ** 2
     err = {"rho": np.abs(s["rho"] - rho), "v": np.hypot(s["vx"] - vx, s["vy"] - vy)}[args["quantity"]][inside]
     return float({"L1": np.mean(err), "L2": np.sqrt(np.mean(err**2)), "Linf": np.max(err)}[args.get("norm", "L1")])
+
+
+@metric
+def pairing_fraction(run, args) -> float:
+    """The fraction of particles (inside ``y_range``) whose nearest neighbour is closer than
+    ``fraction`` (default ½) of their own spacing √(m/ρ) (2D): particles pairing or clumping
+    (Abel 2011 §3.2, §4.1). A lattice or a glass has none."""
+    from scipy.spatial import cKDTree
+
+    s = last_snapshot(run.dir)
+    lo, hi = args.get("y_range", [-np.inf, np.inf])
+    sel = (s["y"] > lo) & (s["y"] < hi)
+    box = args.get("period_x")  # a periodic x side: the tree wraps it
+    x = np.mod(s["x"], box) if box else s["x"]
+    pts = np.stack([x, s["y"] - s["y"].min()], 1)
+    tree = cKDTree(pts, boxsize=[box, 1e9] if box else None)
+    d, _ = tree.query(pts[sel], k=2)
+    spacing = np.sqrt(s["m"][sel] / s["rho"][sel])
+    return float(np.mean(d[:, 1] < args.get("fraction", 0.5) * spacing))
+
+
+@metric
+def stable_time(run, args) -> float:
+    """The first time the total energy departs from its initial value by more than
+    ``tolerance`` (default 5 %), or the last time reached: how long a run stays stable. Read
+    from diagnostics.csv, so a run that stopped unstable has a figure too."""
+    d = diagnostics(run.dir)
+    e = d["total"]
+    bad = np.where(np.abs(e - e[0]) > args.get("tolerance", 0.05) * abs(e[0]))[0]
+    return float(d["time"][bad[0]] if len(bad) else d["time"][-1])
+
+
+stable_time.on_failure = True

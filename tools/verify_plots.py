@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from verify_metrics import diagnostics, kh_mode, last_snapshot, series
+from verify_metrics import diagnostics, instability_mode, last_snapshot, series
 
 PLOTS = {}
 
@@ -132,12 +132,12 @@ def density_map(ax, s: dict, title: str, quantity: str = "rho") -> None:
 
 
 @plot
-def kh_growth(claim: dict, runs: list, png: Path) -> None:
-    """KH: the mode amplitude against t per scheme and resolution (log axis), the linear-theory
+def mode_growth(claim: dict, runs: list, png: Path) -> None:
+    """KH or RT: the mode amplitude against t per scheme and resolution (log axis), the linear-theory
     growth e^{σt} through the judged scheme's amplitude at the fit window's start, and the
     density of the judged scheme's finest run at t_end."""
     args = claim["run"]["metric_args"]
-    mode = kh_mode(args)
+    mode = instability_mode(args)
     plt, fig, (ax_a, ax_m) = figure(2, size=(6.4, 5.0))
     colour, style = styles(runs)
     judged = claim_scheme(claim)
@@ -155,12 +155,13 @@ def kh_growth(claim: dict, runs: list, png: Path) -> None:
         ax_a.semilogy(tt, a0 * np.exp(args["sigma"] * (tt - t0)), "k--", lw=1.2, label=f"linear theory σ = {args['sigma']:g}")
     ax_a.axvspan(t0, t1, color="0.9", zorder=0, label="fit window")
     ax_a.set_xlabel("t")
-    ax_a.set_ylabel({"mcnally": "mode amplitude (McNally et al. eqs 10–13)", "vy_rms": "v_y,rms (Rosswog eq. 111)"}[args["mode"]])
+    ax_a.set_ylabel({"mcnally": "mode amplitude (McNally et al. eqs 10–13)", "vy_rms": "v_y,rms (Rosswog eq. 111)",
+                     "band": f"v_y mode amplitude within {args.get('band')} of y = {args.get('y0')}"}[args["mode"]])
     ax_a.legend(fontsize=5, ncol=2)
     best = finest([r for r in runs if r[0] == judged]).get(judged)
     if best:
         density_map(ax_m, last_snapshot(best[1].dir), f"{judged} N={best[0]}: density at t_end")
-    finish(plt, fig, claim, png, "KH growth against linear theory")
+    finish(plt, fig, claim, png, "instability growth against linear theory")
 
 
 @plot
@@ -202,3 +203,23 @@ def yee_profile(claim: dict, runs: list, png: Path) -> None:
     axes[2].set_ylabel(f"{metric} ({claim['run']['metric_args'].get('quantity')}, {claim['run']['metric_args'].get('norm', 'L1')})")
     axes[2].legend(fontsize=6)
     finish(plt, fig, claim, png, "Yee vortex at t = 8")
+
+
+@plot
+def maps(claim: dict, runs: list, png: Path) -> None:
+    """Density maps at t_end of the schemes the claim names in ``plot_args.schemes`` (default:
+    the judged ones), each at its finest resolution, side by side."""
+    wanted = claim["run"].get("plot_args", {}).get("schemes")
+    if not wanted:
+        wanted = []
+        for j in (claim["judge"] if isinstance(claim["judge"], list) else [claim["judge"]]):
+            for s in [j.get("scheme")] + list(j.get("schemes", [])):
+                if s and s not in wanted:
+                    wanted.append(s)
+    best = finest(runs)
+    shown = [s for s in wanted if s in best]
+    plt, fig, axes = figure(max(len(shown), 1), size=(4.2, 6.0))
+    for ax, scheme in zip(axes, shown):
+        res, run, _ = best[scheme]
+        density_map(ax, last_snapshot(run.dir), f"{scheme}" + (f" N={res}" if res else "") + ": density at t_end")
+    finish(plt, fig, claim, png, "density at t_end")

@@ -32,6 +32,19 @@ pub struct RpsphParams {
     /// Which energy equation: `entropy` (the form the paper prefers, the particle's own
     /// P dV work) or `eq18` (the alternative printed for internal-energy codes).
     pub energy: RpsphEnergy,
+    /// Which relative-pressure force: `abel` (eq. 4, ρ_b² below) or `morris` (eq. 5, Morris
+    /// 1996 / Monaghan 1992: ρ_a ρ_b below), the comparison the paper finds unstable (Fig. 5).
+    pub force: RpsphForce,
+}
+
+/// The relative-pressure momentum equation (Abel 2011, eqs 4 and 5).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RpsphForce {
+    /// a_a = −Σ m_b (P_b − P_a)/ρ_b² ∇W (eq. 4).
+    Abel,
+    /// a_a = −Σ m_b (P_b − P_a)/(ρ_a ρ_b) ∇W (eq. 5).
+    Morris,
 }
 
 /// The energy equation of rpSPH (Abel 2011, eqs 17–18 and the text after them).
@@ -67,6 +80,7 @@ impl Default for RpsphParams {
             // 191,343 steps, since the hot particle is heated by its cold neighbours' P and never
             // does P dV work of its own; in 2D the time step collapsed at t = 0.027.
             energy: RpsphEnergy::Entropy,
+            force: RpsphForce::Abel,
         }
     }
 }
@@ -97,6 +111,7 @@ pub fn build(params: RpsphParams) -> StandardSph {
         symmetric: params.gradient == RpsphGradient::Symmetric,
         shock_switch: params.shock_switch,
         neighbour_pressure_work: params.energy == RpsphEnergy::Eq18,
+        morris: params.force == RpsphForce::Morris,
     };
     StandardSph::with_form(params.viscosity(), form, "rpsph")
 }

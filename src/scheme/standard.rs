@@ -357,11 +357,13 @@ pub(crate) enum PressureForm {
     /// the paper's preferred one (Discussion, after eq. 18: "we prefer the entropy formulation", which rpSPH does not
     /// change) in u form, du_a/dt = P_a/(Ω_a ρ_a²) Σ m_b v_ab·∇_a W_ab(h_a), unless
     /// `neighbour_pressure_work`: eq. 18 as printed, du_a/dt = Σ m_b P_b/ρ_b² v_ab·∇_a W_ab(h_a)
-    /// (printed "ρ_j ρ_j"; ρ_a ρ_b is possible, we take the print).
+    /// (printed "ρ_j ρ_j"; ρ_a ρ_b is possible, we take the print). `morris`: eq. 5's
+    /// denominator ρ_a ρ_b in place of ρ_b² (the paper's comparison).
     Relative {
         symmetric: bool,
         shock_switch: bool,
         neighbour_pressure_work: bool,
+        morris: bool,
     },
 }
 
@@ -437,6 +439,7 @@ pub(crate) fn force_pass<const D: usize>(
             ..
         }
     );
+    let morris = matches!(form, PressureForm::Relative { morris: true, .. });
     {
         let k = &sys.kernel;
         sys.gather_with(
@@ -461,7 +464,11 @@ pub(crate) fn force_pass<const D: usize>(
                     (ra.pstd * fa + rb.pstd * fb, ra.pstd * mb * w * fa)
                 } else {
                     let g = if symmetric { fbar } else { fa };
-                    let rho2 = rb.rho * rb.rho;
+                    let rho2 = if morris {
+                        ra.rho * rb.rho
+                    } else {
+                        rb.rho * rb.rho
+                    };
                     let work = if eq18 { rb.p / rho2 } else { ra.pstd };
                     ((rb.p - ra.p) / rho2 * g, work * mb * w * fa)
                 };
