@@ -29,5 +29,6 @@ mod rosswog;
 mod rosswog_static;
 mod rpsph;
 mod sod;
+mod suite_small;
 mod viscosity;
 mod wall_schemes;

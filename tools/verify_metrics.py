@@ -361,3 +361,20 @@ def stable_time(run, args) -> float:
 
 
 stable_time.on_failure = True
+
+
+@metric
+def vrms_over_sound(run, args) -> float:
+    """sqrt(⟨|v|²⟩) over the mean sound speed at t_end (Abel's v_rms of a gas that should stay
+    at rest, §3.1)."""
+    s = last_snapshot(run.dir)
+    return float(np.sqrt(np.mean(s["vx"] ** 2 + s["vy"] ** 2 + s["vz"] ** 2)) / np.mean(s["cs"]))
+
+
+@metric
+def rms_radius_change(run, args) -> float:
+    """r_rms(t_end)/r_rms(0) − 1 about the origin: how far a blob that should stay still has
+    spread."""
+    snaps = sorted(run.dir.glob("snapshot_*.csv"))
+    r = [np.sqrt(np.mean(s["x"] ** 2 + s["y"] ** 2 + s["z"] ** 2)) for s in (read_csv(snaps[0]), read_csv(snaps[-1]))]
+    return float(r[1] / r[0] - 1)
