@@ -378,3 +378,12 @@ def rms_radius_change(run, args) -> float:
     snaps = sorted(run.dir.glob("snapshot_*.csv"))
     r = [np.sqrt(np.mean(s["x"] ** 2 + s["y"] ** 2 + s["z"] ** 2)) for s in (read_csv(snaps[0]), read_csv(snaps[-1]))]
     return float(r[1] / r[0] - 1)
+
+
+@metric
+def post_shock_peak_ratio(run, args) -> float:
+    """The largest density between ``x_from`` and ``x_to`` (behind a shock, past its contact)
+    over the exact post-shock density ``rho``: 1 is the exact jump, above 1 overshoots."""
+    s = last_snapshot(run.dir)
+    sel = (s["x"] > args["x_from"]) & (s["x"] < args["x_to"])
+    return float(s["rho"][sel].max() / args["rho"])
