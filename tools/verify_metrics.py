@@ -387,3 +387,21 @@ def post_shock_peak_ratio(run, args) -> float:
     s = last_snapshot(run.dir)
     sel = (s["x"] > args["x_from"]) & (s["x"] < args["x_to"])
     return float(s["rho"][sel].max() / args["rho"])
+
+
+def shock_radius_by_angle(s: dict[str, np.ndarray], bins: int = 180) -> tuple[np.ndarray, np.ndarray]:
+    """(bin-centre angles, shock radius per angle bin about the origin): the radius of the
+    densest particle in each bin."""
+    r = np.hypot(s["x"], s["y"])
+    phi = np.arctan2(s["y"], s["x"])
+    k = ((phi + np.pi) / (2 * np.pi) * bins).astype(int) % bins
+    rs = np.array([r[k == i][np.argmax(s["rho"][k == i])] for i in range(bins)])
+    return (np.arange(bins) + 0.5) / bins * 2 * np.pi - np.pi, rs
+
+
+@metric
+def sixfold_imprint(run, args) -> float:
+    """The amplitude of the sixfold harmonic of the shock radius r_s(φ) over its mean,
+    2|Σ r_s e^{6iφ}| / Σ r_s: a hexagonal lattice's imprint on a blast wave (Rosswog §7.8.3)."""
+    phi, rs = shock_radius_by_angle(last_snapshot(run.dir), args.get("bins", 180))
+    return float(2 * abs(np.sum(rs * np.exp(6j * phi))) / np.sum(rs))

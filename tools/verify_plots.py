@@ -223,3 +223,26 @@ def maps(claim: dict, runs: list, png: Path) -> None:
         res, run, _ = best[scheme]
         density_map(ax, last_snapshot(run.dir), f"{scheme}" + (f" N={res}" if res else "") + ": density at t_end")
     finish(plt, fig, claim, png, "density at t_end")
+
+
+@plot
+def shock_radius_angle(claim: dict, runs: list, png: Path) -> None:
+    """A blast wave's shock radius against angle, minus its mean, per scheme (a sixfold ripple
+    is the lattice's imprint), and the judged scheme's density map."""
+    from verify_metrics import shock_radius_by_angle
+
+    plt, fig, (ax_r, ax_m) = figure(2, size=(6.4, 4.6))
+    colour, _ = styles(runs)
+    for scheme, (res, run, _) in finest(runs).items():
+        phi, rs = shock_radius_by_angle(last_snapshot(run.dir))
+        ax_r.plot(np.degrees(phi), rs - rs.mean(), color=colour[scheme], lw=0.9, label=scheme)
+    for a in range(-180, 181, 60):
+        ax_r.axvline(a, color="0.85", lw=0.6, zorder=0)
+    ax_r.set_xlabel("angle φ (degrees; grey: every 60°)")
+    ax_r.set_ylabel("shock radius − its mean")
+    ax_r.legend(fontsize=6)
+    judged = claim_scheme(claim)
+    best = finest(runs).get(judged)
+    if best:
+        density_map(ax_m, last_snapshot(best[1].dir), f"{judged}: density at t_end")
+    finish(plt, fig, claim, png, "blast in a box: the lattice's imprint on the shock")
