@@ -159,6 +159,11 @@ impl Case {
                 })?
             }
         };
+        // `[kernel]` is optional and every key of it too: an absent one is the empty table, so
+        // `--set kernel.eta=…` works on a case that takes its scheme's kernel
+        table
+            .entry("kernel")
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
         for s in sets {
             overrides::apply(&mut table, s).map_err(at)?;
         }
