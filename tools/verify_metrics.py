@@ -405,3 +405,12 @@ def sixfold_imprint(run, args) -> float:
     2|Σ r_s e^{6iφ}| / Σ r_s: a hexagonal lattice's imprint on a blast wave (Rosswog §7.8.3)."""
     phi, rs = shock_radius_by_angle(last_snapshot(run.dir), args.get("bins", 180))
     return float(2 * abs(np.sum(rs * np.exp(6j * phi))) / np.sum(rs))
+
+
+@metric
+def trigger_level(run, args) -> float:
+    """A column of triggers.csv (Rosswog's dissipation triggers after each step: ``column``,
+    e.g. "max K_noise1") reduced over time by ``stat``: "max", "first" or "last"."""
+    d = read_csv(run.dir / "triggers.csv")
+    c = d[args["column"]]
+    return float({"max": c.max(), "first": c[0], "last": c[-1]}[args.get("stat", "max")])

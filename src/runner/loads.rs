@@ -3,7 +3,9 @@
 //! diagnostics.csv when the case has bodies; and the flow history of every port: `ports.csv`
 //! (t, then per port its mean pressure, volume flow into the fluid, and the exact mass in and
 //! out since the start) and `ports.png` (volume flow per port). Every column header and axis
-//! carries its unit (`crate::units`: a 2D case's force is per metre of depth, N/m).
+//! carries its unit (`crate::units`: a 2D case's force is per metre of depth, N/m). For a
+//! scheme with dissipation triggers (Rosswog's F1–F3), `triggers.csv`: the largest K and
+//! the largest shock, noise-1 and noise-2 targets after each recorded step (dimensionless).
 
 use crate::io::plot::{profile_png, Panel};
 use crate::sim::Simulation;
@@ -17,6 +19,7 @@ pub struct LoadHistory {
     rows: Vec<(f64, Vec<f64>)>,
     ports: Vec<String>,
     port_rows: Vec<(f64, Vec<f64>)>,
+    trigger_rows: Vec<(f64, crate::scheme::rosswog::TriggerLevels)>,
 }
 
 /// Columns per port in ports.csv, with their units in dimension `d`.
@@ -32,6 +35,9 @@ fn port_columns(d: usize) -> [(&'static str, &'static str); 4] {
 
 impl LoadHistory {
     pub fn record<const D: usize>(&mut self, sim: &Simulation<D>) {
+        if let Some(l) = sim.scheme.trigger_levels() {
+            self.trigger_rows.push((sim.time, l));
+        }
         if !sim.sys.ports.is_empty() {
             if self.ports.is_empty() {
                 self.ports = sim.sys.ports.iter().map(|p| p.name.clone()).collect();
@@ -63,8 +69,26 @@ impl LoadHistory {
 
     /// Write bodies.csv and loads.png (with bodies), ports.csv and ports.png (with ports)
     /// into `dir`.
+    fn write_triggers(&self, dir: &Path) -> Result<(), String> {
+        if self.trigger_rows.is_empty() {
+            return Ok(());
+        }
+        let path = dir.join("triggers.csv");
+        let mut text = String::from(
+            "t [s],max K,max K_shock,max K_noise1,max K_noise2,mean K_shock,mean K_noise1,mean K_noise2\n",
+        );
+        for (t, l) in &self.trigger_rows {
+            text += &format!(
+                "{t:.9e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e}\n",
+                l.k, l.shock, l.noise1, l.noise2, l.mean_shock, l.mean_noise1, l.mean_noise2
+            );
+        }
+        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))
+    }
+
     pub fn write(&self, dir: &Path) -> Result<(), String> {
         self.write_ports(dir)?;
+        self.write_triggers(dir)?;
         if self.names.is_empty() {
             return Ok(());
         }

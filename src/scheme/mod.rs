@@ -36,6 +36,11 @@ pub trait Scheme<const D: usize>: Send + Sync {
     }
     /// Hook after each completed step (switch evolution).
     fn end_step(&mut self, _sys: &mut System<D>, _dt: f64) {}
+    /// The dissipation triggers' levels after the latest step, for schemes that have them
+    /// (Rosswog's F1–F3): the largest K and the largest shock, noise-1 and noise-2 targets.
+    fn trigger_levels(&self) -> Option<rosswog::TriggerLevels> {
+        None
+    }
     /// Pair accelerations of the latest evaluation, for schemes whose final thermal energy
     /// comes from the compatible update (Frontiere, Raskin & Owen (2017) §3.3; eqs 56–68) rather than from du/dt. The
     /// `crk-rk2` integrator uses them; the others integrate du/dt.

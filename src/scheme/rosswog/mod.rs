@@ -203,6 +203,25 @@ pub struct Rosswog {
     /// Slot holding ∇·v of the previous full step (shock trigger).
     prev_div_slot: usize,
     first_step: bool,
+    levels: Option<TriggerLevels>,
+}
+
+/// The largest dissipation parameter and trigger targets over the particles after a step
+/// (Rosswog (2015) Eqs. 85–95; the paper reports them for the Gresho vortex, §7.4).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct TriggerLevels {
+    /// max K_a.
+    pub k: f64,
+    /// max K_max A/(A + (c/h)²), the shock trigger's target.
+    pub shock: f64,
+    /// max K_max κ1 (noise trigger N1).
+    pub noise1: f64,
+    /// max K_max κ2 (noise trigger N2).
+    pub noise2: f64,
+    /// The means over the particles of the shock, noise-1 and noise-2 targets.
+    pub mean_shock: f64,
+    pub mean_noise1: f64,
+    pub mean_noise2: f64,
 }
 
 impl Rosswog {
@@ -212,6 +231,7 @@ impl Rosswog {
             preset,
             prev_div_slot: usize::MAX,
             first_step: true,
+            levels: None,
         }
     }
 
@@ -479,9 +499,19 @@ impl<const D: usize> Scheme<D> for Rosswog {
 
     fn end_step(&mut self, sys: &mut System<D>, dt: f64) {
         if self.params.triggers {
-            triggers::update(sys, &self.params, self.prev_div_slot, dt, self.first_step);
+            self.levels = Some(triggers::update(
+                sys,
+                &self.params,
+                self.prev_div_slot,
+                dt,
+                self.first_step,
+            ));
         }
         self.first_step = false;
+    }
+
+    fn trigger_levels(&self) -> Option<TriggerLevels> {
+        self.levels
     }
 
     /// Whether the trigger has seen a step yet (its first step has no previous ∇·v).

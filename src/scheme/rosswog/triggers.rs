@@ -7,7 +7,7 @@
 //! Kⁿ⁺¹ = max(K_des, K_min + (Kⁿ − K_min) e^{−Δt/τ}); (d) the noise sums run over all
 //! neighbours within the support. ∇·v is the fIA estimate of the latest evaluation.
 
-use super::RosswogParams;
+use super::{RosswogParams, TriggerLevels};
 use crate::system::System;
 use rayon::prelude::*;
 
@@ -41,7 +41,7 @@ pub fn update<const D: usize>(
     prev_slot: usize,
     dt: f64,
     first: bool,
-) {
+) -> TriggerLevels {
     let n = sys.particles.len();
     let mut sums = vec![NoiseSums::default(); n];
     {
@@ -56,7 +56,7 @@ pub fn update<const D: usize>(
     let p = &mut sys.particles;
     let (div, cs, h) = (&p.div_v, &p.sound_speed, &p.h);
     let prev = &p.extra_scalars[prev_slot];
-    let new_k: Vec<f64> = (0..n)
+    let targets: Vec<(f64, f64, f64, f64)> = (0..n)
         .into_par_iter()
         .map(|a| {
             let mut s = sums[a];
@@ -95,10 +95,21 @@ pub fn update<const D: usize>(
             } else {
                 0.0
             };
-            let k_noise = prm.k_max * kappa1.max(kappa2);
-            let k_des = k_shock.max(k_noise);
-            (k_des, c_over_h)
+            (k_shock, prm.k_max * kappa1, prm.k_max * kappa2, c_over_h)
         })
+        .collect();
+    let mut levels = TriggerLevels::default();
+    for t in &targets {
+        levels.shock = levels.shock.max(t.0);
+        levels.noise1 = levels.noise1.max(t.1);
+        levels.noise2 = levels.noise2.max(t.2);
+        levels.mean_shock += t.0 / n as f64;
+        levels.mean_noise1 += t.1 / n as f64;
+        levels.mean_noise2 += t.2 / n as f64;
+    }
+    let new_k: Vec<f64> = targets
+        .par_iter()
+        .map(|&(k_shock, k_n1, k_n2, c_over_h)| (k_shock.max(k_n1).max(k_n2), c_over_h))
         .zip(p.alpha.par_iter())
         .map(|((k_des, c_over_h), &k_old)| {
             let tau = prm.chi / c_over_h.max(1e-300);
@@ -114,4 +125,6 @@ pub fn update<const D: usize>(
     };
     let d = p.div_v.clone();
     p.extra_scalars[prev_slot] = d;
+    levels.k = p.alpha.iter().cloned().fold(0.0, f64::max);
+    levels
 }
