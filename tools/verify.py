@@ -149,14 +149,26 @@ def judged_scheme(claim: dict) -> str | None:
     return j.get("scheme") or (j.get("schemes") or [None])[0]
 
 
-def judge(claim: dict, figures: dict) -> tuple[str, str]:
-    """(verdict, our figure as text): reproduced when every judge passes."""
-    results = [judge_one(claim, j, figures) for j in judges(claim)]
+def judge(claim: dict, figures: dict, seconds: dict | None = None) -> tuple[str, str]:
+    """(verdict, our figure as text): reproduced when every judge passes. `seconds` holds each
+    run's wall time as figures holds its figure (the "cost" judge reads both)."""
+    results = [judge_one(claim, j, figures, seconds or {}) for j in judges(claim)]
     verdict = "reproduced" if all(v == "reproduced" for v, _ in results) else "not reproduced"
     return verdict, "; ".join(t for _, t in results)
 
 
-def judge_one(claim: dict, j: dict, figures: dict) -> tuple[str, str]:
+def error_at_cost(errs: dict, secs: dict) -> tuple[float, float]:
+    """Least-squares fit of ln(error) against ln(wall time) over a scheme's resolutions:
+    (intercept, slope)."""
+    pts = [(math.log(secs[l]), math.log(v)) for l, v in errs.items() if not isinstance(v, str) and v > 0 and secs.get(l, 0) > 0]
+    if len(pts) < 2:
+        raise ValueError("fewer than two finished resolutions")
+    mx, my = sum(p[0] for p in pts) / len(pts), sum(p[1] for p in pts) / len(pts)
+    slope = sum((x - mx) * (y - my) for x, y in pts) / sum((x - mx) ** 2 for x, _ in pts)
+    return my - slope * mx, slope
+
+
+def judge_one(claim: dict, j: dict, figures: dict, seconds: dict | None = None) -> tuple[str, str]:
     """(verdict, our figure as text) from figures[scheme][label] (label: a resolution's N or '')."""
     kind = j["kind"]
     metric = claim["run"]["metric"]
@@ -179,6 +191,20 @@ def judge_one(claim: dict, j: dict, figures: dict) -> tuple[str, str]:
             ns, errs = [float(n) for n in series], list(series.values())
             got = fit_order(ns, errs)
             text = f"{j['scheme']}: order {got:.2f} ({metric} {errs[0]:.3g} → {errs[-1]:.3g}, N {ns[0]:g} → {ns[-1]:g})"
+        elif kind == "cost":
+            # the two schemes' error-against-wall-time lines compared at one wall time, the
+            # geometric middle of the times both ran (CRKSPH §4.3.3's cost-accuracy plot)
+            a, b = j["schemes"]
+            fa, fb = (error_at_cost(figures[s], (seconds or {}).get(s, {})) for s in (a, b))
+            ta = [seconds[a][l] for l in figures[a] if not isinstance(figures[a][l], str)]
+            tb = [seconds[b][l] for l in figures[b] if not isinstance(figures[b][l], str)]
+            lo, hi = max(min(ta), min(tb)), min(max(ta), max(tb))
+            if lo > hi:
+                lo, hi = min(ta + tb), max(ta + tb)
+            t = math.sqrt(lo * hi)
+            ea, eb = (math.exp(f[0] + f[1] * math.log(t)) for f in (fa, fb))
+            got = ea / eb
+            text = f"{metric} at equal wall time ({t:.3g} s): {a} / {b} = {got:.3g} ({ea:.3g} / {eb:.3g})"
         elif kind == "ratio":
             a, b = j["schemes"]
             got = value(a) / value(b)
@@ -354,6 +380,7 @@ def main() -> int:
             (work / "tests" / f"{c['id']}.log").write_text(log)
         else:
             figures: dict[str, dict[str, float | str]] = {}
+            seconds: dict[str, dict[str, float]] = {}
             cost = 0.0
             for scheme, label, run, args in plan[c["id"]]:
                 run = runs[run.dir]
@@ -368,7 +395,8 @@ def main() -> int:
                     except (KeyError, ValueError) as e:
                         val = f"metric: {e}"
                 figures.setdefault(scheme, {})[label] = val
-            verdict, ours = judge(c, figures) if "judge" in c else ("measured", "")
+                seconds.setdefault(scheme, {})[label] = run.seconds
+            verdict, ours = judge(c, figures, seconds) if "judge" in c else ("measured", "")
             png = out / f"{c['id']}.png"
             plot_claim(c, figures, png)
             judged_label = judged_scheme(c)

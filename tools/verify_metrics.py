@@ -414,3 +414,20 @@ def trigger_level(run, args) -> float:
     d = read_csv(run.dir / "triggers.csv")
     c = d[args["column"]]
     return float({"max": c.max(), "first": c[0], "last": c[-1]}[args.get("stat", "max")])
+
+
+@metric
+def noh_l1_velocity(run, args) -> float:
+    """L1 of the velocity against Noh's solution at t_end, over the particles within ``r_max``
+    of ``center``: at rest behind the shock (r < t/3 in 2D and 3D), v = −r̂ ahead of it
+    (unit inflow speed)."""
+    s = last_snapshot(run.dir)
+    t = run.summary["time"]
+    c = args.get("center", [0.0, 0.0, 0.0])
+    d = run.summary["dimension"]
+    x = np.stack([s[a] - c[k] for k, a in enumerate("xyz"[:d])], 1)
+    v = np.stack([s[a] for a in ("vx", "vy", "vz")[:d]], 1)
+    r = np.linalg.norm(x, axis=1)
+    inside = r < args.get("r_max", 0.5)
+    exact = np.where((r > t / 3)[:, None], -x / np.where(r > 0, r, 1)[:, None], 0.0)
+    return float(np.mean(np.linalg.norm(v - exact, axis=1)[inside]))

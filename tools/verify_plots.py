@@ -246,3 +246,26 @@ def shock_radius_angle(claim: dict, runs: list, png: Path) -> None:
     if best:
         density_map(ax_m, last_snapshot(best[1].dir), f"{judged}: density at t_end")
     finish(plt, fig, claim, png, "blast in a box: the lattice's imprint on the shock")
+
+
+@plot
+def cost_accuracy(claim: dict, runs: list, png: Path) -> None:
+    """The claim's error against each run's wall time, per scheme over its resolutions (log
+    axes): schemes on one line cost the same for the same error."""
+    from verify_metrics import METRICS
+
+    plt, fig, (ax,) = figure(1)
+    colour, _ = styles(runs)
+    metric = claim["run"]["metric"]
+    by_scheme: dict[str, list] = {}
+    for scheme, res, run, args in runs:
+        by_scheme.setdefault(scheme, []).append((run.seconds, METRICS[metric](run, args), res))
+    for scheme, pts in by_scheme.items():
+        pts.sort()
+        ax.loglog([p[0] for p in pts], [p[1] for p in pts], "o-", color=colour[scheme], ms=4, label=scheme)
+        for t, e, res in pts:
+            ax.annotate(str(res), (t, e), fontsize=6, xytext=(3, 3), textcoords="offset points")
+    ax.set_xlabel("wall time of the run (s, one thread; labels: particles per dimension)")
+    ax.set_ylabel(f"{metric}")
+    ax.legend(fontsize=7)
+    finish(plt, fig, claim, png, "cost against accuracy")

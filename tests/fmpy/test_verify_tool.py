@@ -37,6 +37,13 @@ def test_judges_decide_against_their_bounds():
     assert verdict == "not reproduced" and "order 1.00" in text, text
     both["judge"][1]["min"] = 0.9
     assert verify.judge(both, figures)[0] == "reproduced"
+    # cost: two error-against-wall-time lines compared at one wall time; b costs 4x a for the
+    # same error (err = 1/t for a, 4/t for b), so at equal time b's error is 4x a's
+    figs = {"a": {"1": 1.0, "2": 0.25}, "b": {"1": 4.0, "2": 1.0}}
+    secs = {"a": {"1": 1.0, "2": 4.0}, "b": {"1": 1.0, "2": 4.0}}
+    cost = {"run": {"metric": "m"}, "judge": {"kind": "cost", "schemes": ["b", "a"], "min": 3.9, "max": 4.1}}
+    verdict, text = verify.judge(cost, figs, secs)
+    assert verdict == "reproduced", text
     verdict, text = verify.judge(claim("value", scheme="c", max=1.0), figures)
     assert verdict == "not reproduced" and "unstable" in text
 
