@@ -431,3 +431,25 @@ def noh_l1_velocity(run, args) -> float:
     inside = r < args.get("r_max", 0.5)
     exact = np.where((r > t / 3)[:, None], -x / np.where(r > 0, r, 1)[:, None], 0.0)
     return float(np.mean(np.linalg.norm(v - exact, axis=1)[inside]))
+
+
+def cloud_mass(s: dict[str, np.ndarray], args: dict) -> float:
+    """The mass of cloud-like gas: particles with ρ above ``rho_min`` and u below ``u_max``
+    (Agertz et al. 2007: ρ > 0.64 ρ_cloud, T < 0.9 T_ambient)."""
+    sel = (s["rho"] > args["rho_min"]) & (s["u"] < args["u_max"])
+    return float(np.sum(s["m"][sel]))
+
+
+def cloud_fraction_series(run_dir: Path, args: dict) -> tuple[np.ndarray, np.ndarray]:
+    """(t, M(t)/M0), M0 the cloud-like mass at t = 0 (the cloud's smoothed edge is not)."""
+    t, m = series(run_dir, lambda s: cloud_mass(s, args))
+    return t, m / m[0]
+
+
+@metric
+def cloud_disruption_time(run, args) -> float:
+    """The first time, in units of ``t_kh``, at which the cloud fraction falls below
+    ``threshold`` (default 0.1); the run's end time if it never does (a lower bound)."""
+    t, f = cloud_fraction_series(run.dir, args)
+    below = np.where(f < args.get("threshold", 0.1))[0]
+    return float((t[below[0]] if len(below) else t[-1]) / args["t_kh"])

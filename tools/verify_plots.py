@@ -269,3 +269,27 @@ def cost_accuracy(claim: dict, runs: list, png: Path) -> None:
     ax.set_ylabel(f"{metric}")
     ax.legend(fontsize=7)
     finish(plt, fig, claim, png, "cost against accuracy")
+
+
+@plot
+def cloud_mass(claim: dict, runs: list, png: Path) -> None:
+    """The blob test: the cloud fraction M(t)/M0 against t/τ_KH per scheme, and the judged
+    scheme's density at t_end."""
+    from verify_metrics import cloud_fraction_series
+
+    args = claim["run"]["metric_args"]
+    plt, fig, (ax, ax_m) = figure(2, size=(6.4, 4.2))
+    colour, style = styles(runs)
+    for scheme, res, run, _ in runs:
+        t, f = cloud_fraction_series(run.dir, args)
+        ax.plot(t / args["t_kh"], f, color=colour[scheme], ls=style[res], label=scheme)
+    ax.axhline(args.get("threshold", 0.1), color="0.6", ls=":", lw=0.8, label="disrupted")
+    ax.axvline(6.5, color="k", ls="--", lw=0.8, label="paper: CRKSPH 6.5 τ_KH")
+    ax.set_xlabel("t / τ_KH")
+    ax.set_ylabel("cloud mass fraction M(t)/M0")
+    ax.legend(fontsize=6)
+    judged = claim_scheme(claim)
+    best = finest(runs).get(judged)
+    if best:
+        density_map(ax_m, last_snapshot(best[1].dir), f"{judged}: density at t_end")
+    finish(plt, fig, claim, png, "blob: cloud mass against time")
