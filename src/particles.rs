@@ -33,6 +33,10 @@ pub struct Particles<const D: usize> {
     /// takes part in every sum like fluid, but its state is set by the port condition.
     #[serde(default)]
     pub port: Vec<u16>,
+    /// 0 for evolved particles; k + 1 for a particle of driven region k (`boundary::drive`):
+    /// frozen as well, its position, velocity and u set from the region's expressions.
+    #[serde(default)]
+    pub drive: Vec<u16>,
     /// Position at t = 0 (wall particles: their place in the body frame).
     pub rest: Vec<Vector<D>>,
     /// dv/dt from the latest evaluation.
@@ -88,6 +92,7 @@ impl<const D: usize> Particles<D> {
         self.frozen.push(false);
         self.body.push(0);
         self.port.push(0);
+        self.drive.push(0);
         self.rest.push(x);
         self.acc.push(Vector::zeros());
         self.dudt.push(0.0);
@@ -139,6 +144,7 @@ impl<const D: usize> Particles<D> {
         ap(&mut self.frozen, perm);
         ap(&mut self.body, perm);
         ap(&mut self.port, perm);
+        ap(&mut self.drive, perm);
         ap(&mut self.rest, perm);
         ap(&mut self.acc, perm);
         ap(&mut self.dudt, perm);
@@ -159,14 +165,17 @@ impl<const D: usize> Particles<D> {
     }
 
     /// Zero the derivatives of frozen particles (after every evaluation), so no integrator
-    /// moves them or changes their energy.
+    /// moves them or changes their energy. Driven particles keep the velocity their drive
+    /// gave them (the next stage sets their whole state again).
     pub fn hold_frozen(&mut self) {
         for i in 0..self.len() {
             if self.frozen[i] {
                 self.acc[i] = Vector::zeros();
                 self.dudt[i] = 0.0;
                 self.drhodt[i] = 0.0;
-                self.vel[i] = Vector::zeros();
+                if self.drive.get(i).is_none_or(|&k| k == 0) {
+                    self.vel[i] = Vector::zeros();
+                }
             }
         }
     }

@@ -120,6 +120,11 @@ impl<const D: usize> Simulation<D> {
         control: StepControl,
     ) -> Result<Self, SolverError> {
         sys.place_bodies(0.0);
+        sys.apply_drives().map_err(|message| SolverError::Scheme {
+            message,
+            time: 0.0,
+            step: 0,
+        })?;
         scheme.init(&mut sys);
         scheme.evaluate(&mut sys).map_err(|e| SolverError::Scheme {
             message: e.0,
@@ -203,7 +208,7 @@ impl<const D: usize> Simulation<D> {
         if self.reorder_every > 0 && self.steps > 0 && self.steps % self.reorder_every == 0 {
             self.reorder();
         }
-        // the evaluations inside the step see its end time (port pressures)
+        // the integrator gives each evaluation its stage's time from the step's end time
         self.sys.time = self.time + dt;
         self.integrator
             .step(&mut self.sys, self.scheme.as_mut(), dt)
@@ -272,6 +277,13 @@ impl<const D: usize> Simulation<D> {
     pub fn reevaluate(&mut self) -> Result<(), SolverError> {
         self.sys.place_bodies(self.time);
         self.sys.time = self.time;
+        self.sys
+            .apply_drives()
+            .map_err(|message| SolverError::Scheme {
+                message,
+                time: self.time,
+                step: self.steps,
+            })?;
         self.scheme
             .evaluate(&mut self.sys)
             .map_err(|e| SolverError::Scheme {

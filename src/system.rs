@@ -86,6 +86,8 @@ pub struct System<const D: usize> {
     pub frame: Option<crate::boundary::frame::Frame<D>>,
     /// Pressure ports (openings with particle buffers, `boundary::ports`).
     pub ports: Vec<crate::boundary::ports::Port<D>>,
+    /// Driven regions (`boundary::drive`), indexed by `particles.drive` − 1.
+    pub drives: Vec<crate::boundary::drive::Drive<D>>,
     /// Time of the state the next evaluation sees (set by the driver: the end of the step
     /// being taken), for time-dependent boundary values (port pressures).
     pub time: f64,

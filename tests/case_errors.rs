@@ -249,3 +249,40 @@ fn scheme_preset_then_overrides_keeps_the_overrides() {
         }
     }
 }
+
+#[test]
+fn a_driven_region_names_its_bad_expression() {
+    let kidder = include_str!("../models/verify/kidder.toml");
+    let bad: &[(&str, &str, &[&str])] = &[
+        (
+            "position = [\"x*(1 - (t/tau)^2)^0.5\"]",
+            "position = [\"x\", \"y\"]",
+            &["region[0].drive.position", "needs 1 expressions"],
+        ),
+        (
+            "velocity = [\"-(x*t/(tau^2*(1 - (t/tau)^2)^0.5))\"]",
+            "velocity = [\"-(x*t/tau2)\"]",
+            &["region[0].drive.velocity[0]", "unknown name `tau2`"],
+        ),
+        (
+            "s = 1.0e7, tau",
+            "s = 1.0e7, t = 1.0, tau",
+            &["region[0].drive", "`t` is the time"],
+        ),
+        (
+            "pressure = \"s*",
+            "pressure = \"y*s*",
+            &[
+                "region[0].drive.pressure",
+                "`y` is not a coordinate of a 1D case",
+            ],
+        ),
+    ];
+    for (from, to, expect) in bad {
+        assert!(kidder.contains(from), "{from}");
+        let e = err_of(&kidder.replacen(from, to, 1));
+        for w in *expect {
+            assert!(e.contains(w), "{to}: {e}");
+        }
+    }
+}

@@ -453,3 +453,25 @@ def cloud_disruption_time(run, args) -> float:
     t, f = cloud_fraction_series(run.dir, args)
     below = np.where(f < args.get("threshold", 0.1))[0]
     return float((t[below[0]] if len(below) else t[-1]) / args["t_kh"])
+
+
+def entropy_ratio(run, args) -> tuple[np.ndarray, np.ndarray]:
+    """(x0, s/s_exact) at t_end of the particles that started between ``x_from`` and
+    ``x_to`` (the evolved points, not a driven rind), with s = P/ρ^γ against ``s``."""
+    snaps = snapshots(run.dir)
+    first, last = read_csv(snaps[0][1]), read_csv(snaps[-1][1])
+    x0 = dict(zip(first["id"].astype(int), first["x"]))
+    ids = last["id"].astype(int)
+    start = np.array([x0[i] for i in ids])
+    sel = (start > args["x_from"]) & (start < args["x_to"])
+    ratio = last["P"][sel] / last["rho"][sel] ** args["gamma"] / args["s"]
+    order = np.argsort(start[sel])
+    return start[sel][order], ratio[order]
+
+
+@metric
+def entropy_spread(run, args) -> float:
+    """max − min of s/s_exact over the evolved points at t_end (Frontiere, Raskin & Owen 2017
+    §4.0.1: the min-to-max entropy error of the Kidder implosion)."""
+    _, ratio = entropy_ratio(run, args)
+    return float(ratio.max() - ratio.min())

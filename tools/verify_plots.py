@@ -293,3 +293,21 @@ def cloud_mass(claim: dict, runs: list, png: Path) -> None:
     if best:
         density_map(ax_m, last_snapshot(best[1].dir), f"{judged}: density at t_end")
     finish(plt, fig, claim, png, "blob: cloud mass against time")
+
+
+@plot
+def entropy_profile(claim: dict, runs: list, png: Path) -> None:
+    """s/s_exact of the evolved points at t_end against where they started (Frontiere, Raskin
+    & Owen 2017 Fig. 1: the Kidder implosion's entropy profile, exactly 1)."""
+    from verify_metrics import entropy_ratio
+
+    plt, fig, axes = figure(1, size=(7.0, 4.4))
+    colour, _ = styles(runs)
+    for scheme, (res, run, args) in finest(runs).items():
+        x0, ratio = entropy_ratio(run, args)
+        axes[0].plot(x0, ratio, ".-", ms=3, lw=0.8, color=colour[scheme], label=scheme)
+    axes[0].axhline(1.0, color="k", lw=1.0, label="exact (isentropic)")
+    axes[0].set_xlabel("initial position x0 [m]")
+    axes[0].set_ylabel("entropy P/ρ^γ over the exact s [1]")
+    axes[0].legend(fontsize=6)
+    finish(plt, fig, claim, png, "Kidder implosion at t = 0.99τ: entropy of the evolved points")

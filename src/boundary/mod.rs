@@ -3,6 +3,7 @@
 //! ([`frame`]); and the pressure ports that open a body to an outside model ([`ports`]).
 
 pub mod bodies;
+pub mod drive;
 pub mod frame;
 pub mod geometry;
 pub mod kinematics;

@@ -144,10 +144,70 @@ impl CompiledFormula {
     }
 }
 
+/// An expression of a particle's rest position (`x`, `y`, `z`, `r`: where it was at t = 0),
+/// the time `t` and named constants: one quantity of a driven region (`boundary::drive`).
+#[derive(Debug, Clone)]
+pub struct TimeFormula {
+    c: Compiled,
+    /// index of `t` among the parameters
+    t_slot: usize,
+    key: String,
+}
+
+impl TimeFormula {
+    /// Parse `expression` for a `dim`-dimensional case; `key` names it in errors.
+    pub fn compile(
+        key: &str,
+        expression: &str,
+        parameters: &BTreeMap<String, f64>,
+        dim: usize,
+    ) -> Result<Self, CaseError> {
+        if parameters.contains_key("t") {
+            return Err(CaseError(format!(
+                "{key}: `t` is the time; rename the parameter"
+            )));
+        }
+        let mut with_t = parameters.clone();
+        with_t.insert("t".into(), 0.0);
+        let c = compile_expr(key, expression, &with_t, dim, 4)?;
+        let t_slot = with_t.keys().position(|k| k == "t").unwrap_or(0);
+        Ok(Self {
+            c,
+            t_slot,
+            key: key.into(),
+        })
+    }
+
+    /// The value for rest position x at time t (coordinates beyond the case's dimension are
+    /// 0); an evaluation error or a non-finite value is an error naming the key, x and t.
+    pub fn at(&self, x: &[f64], t: f64) -> Result<f64, String> {
+        let mut own = [0.0; 10];
+        own[..x.len()].copy_from_slice(x);
+        own[3] = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let n = own.len();
+        let args: Vec<f64> = self
+            .c
+            .slots
+            .iter()
+            .map(|&s| match s {
+                s if s < n => own[s],
+                s if s - n == self.t_slot => t,
+                s => self.c.params[s - n],
+            })
+            .collect();
+        match self.c.expr.eval(&args) {
+            Ok(v) if v.is_finite() => Ok(v),
+            Ok(v) => Err(format!("{} is {v} at x = {x:?}, t = {t}", self.key)),
+            Err(e) => Err(format!("{}: at x = {x:?}, t = {t}: {e}", self.key)),
+        }
+    }
+}
+
 /// Names of the particle's own variables, in the order of [`Vars::values`].
 const VARIABLES: [&str; 10] = ["x", "y", "z", "r", "rho", "p", "u", "vx", "vy", "vz"];
 
 /// A parsed entry: the expression and, per variable it names, where its value comes from.
+#[derive(Debug, Clone)]
 struct Compiled {
     expr: FlatEx<f64>,
     /// index into `Vars::values` (< 10) or into the parameters (≥ 10)

@@ -463,7 +463,8 @@ pub fn generate_particles<const D: usize>(
             let h = eta * vol.powf(1.0 / D as f64);
             p.push(m, x, s.vel, s.u, s.rho, h, r.material);
             let last = p.len() - 1;
-            p.frozen[last] = r.frozen;
+            p.frozen[last] = r.frozen || r.drive.is_some();
+            p.drive[last] = case.drive_tag(ri);
             spacing_of.push(vol.powf(1.0 / D as f64));
             region_of.push(ri);
         }

@@ -326,6 +326,30 @@ impl Case {
         Ok(sim)
     }
 
+    /// Driven regions in region order: region `ri`'s particles carry `drive_tag(ri)`.
+    fn drives<const D: usize>(&self) -> Result<Vec<crate::boundary::drive::Drive<D>>, CaseError> {
+        self.regions
+            .iter()
+            .enumerate()
+            .filter_map(|(i, r)| {
+                r.drive
+                    .as_ref()
+                    .map(|d| d.build::<D>(&format!("region[{i}].drive")))
+            })
+            .collect()
+    }
+
+    /// 0 for an evolved region, k + 1 for the k-th driven one.
+    pub fn drive_tag(&self, ri: usize) -> u16 {
+        if self.regions[ri].drive.is_none() {
+            return 0;
+        }
+        self.regions[..=ri]
+            .iter()
+            .filter(|r| r.drive.is_some())
+            .count() as u16
+    }
+
     /// The particles, box, kernel and EOS of this case in dimension D, before any evaluation.
     pub fn system<const D: usize>(&self) -> Result<System<D>, CaseError> {
         if D != self.case.dimension {
@@ -395,6 +419,7 @@ impl Case {
             wall_pairs: false,
             frame: self.frame.as_ref().map(|f| f.build::<D>()),
             ports,
+            drives: self.drives::<D>()?,
             time: 0.0,
         })
     }

@@ -166,6 +166,10 @@ pub struct Region {
     /// every sum (ghost layers held at the initial state, e.g. the Yee vortex's outer rings).
     #[serde(default)]
     pub frozen: bool,
+    /// The region's state is imposed at every stage from expressions of rest position and
+    /// time (`boundary::drive`): an analytic boundary such as the Kidder implosion's rind.
+    #[serde(default)]
+    pub drive: Option<crate::boundary::drive::DriveConfig>,
     /// Exactly one of `pressure` and `internal_energy`.
     pub pressure: Option<f64>,
     pub internal_energy: Option<f64>,

@@ -257,6 +257,9 @@ impl Case {
             }
         }
         let d = self.case.dimension;
+        if let Some(drive) = &r.drive {
+            drive.check(&key("drive"), d)?;
+        }
         match r.lattice {
             Lattice::Rings if d != 2 || r.shape != Shape::Sphere || r.spacing.is_none() => {
                 return Err(CaseError(format!(

@@ -54,6 +54,7 @@ fn particles<const D: usize>(
         ("frozen", p.frozen.len()),
         ("body", p.body.len()),
         ("port", p.port.len()),
+        ("drive", p.drive.len()),
         ("rest", p.rest.len()),
         ("acc", p.acc.len()),
         ("dudt", p.dudt.len()),
@@ -109,6 +110,13 @@ fn particles<const D: usize>(
         return Err(format!(
             "particle {i} belongs to port {} of {ports}",
             p.port[i]
+        ));
+    }
+    let drives = now.drive.iter().copied().max().unwrap_or(0);
+    if let Some(i) = p.drive.iter().position(|&k| k > drives) {
+        return Err(format!(
+            "particle {i} belongs to driven region {} of {drives}",
+            p.drive[i]
         ));
     }
     if p.extra_scalars.len() != now.extra_scalars.len()

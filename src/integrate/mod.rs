@@ -143,6 +143,13 @@ fn kick_density<const D: usize>(sys: &mut System<D>, from: &[f64], dt: f64) {
         .for_each(|(i, (r, d))| *r = from[i] + d * dt);
 }
 
+/// The next evaluation sees the state at time t: driven particles take their state there
+/// (`boundary::drive`), time-dependent boundary values (port pressures) their value.
+fn stage_time<const D: usize>(sys: &mut System<D>, t: f64) -> Result<(), SchemeError> {
+    sys.time = t;
+    sys.apply_drives().map_err(SchemeError)
+}
+
 fn enforce_boundaries<const D: usize>(sys: &mut System<D>) {
     let dom = sys.domain;
     let p = &mut sys.particles;
@@ -161,13 +168,16 @@ impl<const D: usize> Integrator<D> {
     }
 
     /// Advance by dt. On entry the particles hold the derivatives of the current state
-    /// (for `crk-rk2`: of the previous midpoint); on exit those of the new state.
+    /// (for `crk-rk2`: of the previous midpoint) and `sys.time` is the end of the step; on
+    /// exit those of the new state. Each evaluation sees its stage's time in `sys.time`.
     pub fn step(
         &mut self,
         sys: &mut System<D>,
         scheme: &mut dyn Scheme<D>,
         dt: f64,
     ) -> Result<(), SchemeError> {
+        let t_end = sys.time;
+        let t0 = t_end - dt;
         match self.kind {
             IntegratorKind::Leapfrog => {
                 let half = 0.5 * dt;
@@ -220,6 +230,7 @@ impl<const D: usize> Integrator<D> {
                 sys.predict_h(dt);
                 // KDK: the step's impulse is ½dt (F_n + F_n+1)
                 sys.accumulate_impulse(half);
+                stage_time(sys, t_end)?;
                 scheme.evaluate(sys)?;
                 sys.hold_constrained();
                 sys.accumulate_impulse(half);
@@ -244,12 +255,14 @@ impl<const D: usize> Integrator<D> {
                 combine(sys, &s0, 0.0, 1.0, dt);
                 combine_density(sys, &s0.rho, 0.0, 1.0, dt);
                 sys.predict_h(dt);
+                stage_time(sys, t_end)?;
                 scheme.evaluate(sys)?;
                 sys.hold_constrained();
                 sys.accumulate_impulse(dt / 6.0);
                 combine(sys, &s0, 0.75, 0.25, dt);
                 combine_density(sys, &s0.rho, 0.75, 0.25, dt);
                 sys.predict_h(-0.5 * dt);
+                stage_time(sys, t0 + 0.5 * dt)?;
                 scheme.evaluate(sys)?;
                 sys.hold_constrained();
                 sys.accumulate_impulse(2.0 * dt / 3.0);
@@ -257,6 +270,7 @@ impl<const D: usize> Integrator<D> {
                 combine_density(sys, &s0.rho, 1.0 / 3.0, 2.0 / 3.0, dt);
                 enforce_boundaries(sys);
                 sys.predict_h(0.5 * dt);
+                stage_time(sys, t_end)?;
                 scheme.evaluate(sys)?;
                 sys.hold_constrained();
                 self.saved = s0;
@@ -271,11 +285,13 @@ impl<const D: usize> Integrator<D> {
                 combine(sys, &s0, 0.0, 1.0, 0.5 * dt);
                 combine_density(sys, &s0.rho, 0.0, 1.0, 0.5 * dt);
                 sys.predict_h(0.5 * dt);
+                stage_time(sys, t0 + 0.5 * dt)?;
                 scheme.evaluate(sys)?;
                 sys.hold_constrained();
                 // the full step uses the midpoint forces only
                 sys.accumulate_impulse(dt);
                 // full step from the start state with the midpoint derivatives
+                let total_energy = scheme.pair_work().is_none() && scheme.total_energy();
                 {
                     let p = &mut sys.particles;
                     let (acc, dudt, vmid) = (&p.acc, &p.dudt, p.vel.clone());
@@ -288,9 +304,18 @@ impl<const D: usize> Integrator<D> {
                             *x = s0.pos[i] + vmid[i] * dt;
                             *v = s0.vel[i] + acc[i] * dt;
                             *u = s0.u[i] + dudt[i] * dt;
+                            if total_energy {
+                                // eq 80 by the midpoint rule: E¹ = E⁰ + Δt m(v_mid·a + du/dt),
+                                // u¹ = E¹/m − ½|v¹|², i.e. u¹ = u⁰ + Δt du/dt
+                                // + Δt (v_mid − (v⁰ + v¹)/2)·a
+                                let v_half = (s0.vel[i] + *v) * 0.5;
+                                *u += dt * (vmid[i] - v_half).dot(&acc[i]);
+                            }
                         });
                 }
                 kick_density(sys, &s0.rho, dt);
+                // driven particles at the step's end first: their v¹ enters v^{1/2} below
+                stage_time(sys, t_end)?;
                 if let Some(work) = scheme.pair_work() {
                     let p = &sys.particles;
                     let v_half: Vec<Vector<D>> = (0..p.len())

@@ -227,7 +227,7 @@ fn momentum_check<const D: usize>(case: &Case, sim: &Simulation<D>) -> MomentumC
     use crate::domain::BoundaryKind;
     let other = sim.sys.domain.kind.contains(&BoundaryKind::Reflect)
         || case.domain.frozen_margin > 0.0
-        || case.regions.iter().any(|r| r.frozen)
+        || case.regions.iter().any(|r| r.frozen || r.drive.is_some())
         || !sim.sys.ports.is_empty()
         || sim.sys.frame.is_some();
     if other {

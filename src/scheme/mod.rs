@@ -47,6 +47,11 @@ pub trait Scheme<const D: usize>: Send + Sync {
     fn pair_work(&self) -> Option<&compatible::PairWork<D>> {
         None
     }
+    /// Whether the `crk-rk2` integrator evolves the total energy E_i = m_i(u_i + ½v_i²) and
+    /// recovers u from it (Frontiere, Raskin & Owen (2017) eq 80) instead of integrating du/dt.
+    fn total_energy(&self) -> bool {
+        false
+    }
     /// State the scheme carries from one step to the next outside the particles (saved and
     /// restored by `coupling::state`; per-particle state belongs in `extra_scalars`).
     fn carried_state(&self) -> Vec<f64> {

@@ -64,6 +64,10 @@ pub struct CrksphParams {
     pub order: OrderName,
     /// Final u from the compatible update (§5) rather than from du/dt (eq 78).
     pub compatible_energy: bool,
+    /// With `compatible_energy = false`: evolve each particle's total energy
+    /// E_i = m_i(u_i + ½v_i²) by eq 80 and recover u from it, the alternative the paper
+    /// compares in the Kidder test (§4.0.1); otherwise u follows du/dt (eq 78).
+    pub total_energy: bool,
 }
 
 impl Default for CrksphParams {
@@ -76,6 +80,7 @@ impl Default for CrksphParams {
             limiter: true,
             order: OrderName::Linear,
             compatible_energy: true,
+            total_energy: false,
         }
     }
 }
@@ -90,6 +95,9 @@ impl CrksphParams {
         }
         check_above("scheme.epsilon2", self.epsilon2, 0.0, 1.0)?;
         check_above("scheme.eta_fold", self.eta_fold, 0.0, 2.0)?;
+        if self.total_energy && self.compatible_energy {
+            return Err("scheme.total_energy: needs scheme.compatible_energy = false (they are the two alternative energy updates of Frontiere, Raskin & Owen (2017) §3.3 and eq 80)".into());
+        }
         Ok(())
     }
 
@@ -260,5 +268,9 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
 
     fn pair_work(&self) -> Option<&PairWork<D>> {
         self.params.compatible_energy.then_some(&self.work)
+    }
+
+    fn total_energy(&self) -> bool {
+        self.params.total_energy
     }
 }
