@@ -12,6 +12,22 @@ pub trait Eos: Send + Sync {
     fn gamma(&self) -> f64;
 }
 
+/// The EOS of material `m`: its entry in `table` (indexed by material id; `[[material]]` of
+/// the case file), else the case's `[eos]`.
+pub fn of_material(default: &EosConfig, table: &[EosConfig], m: u16) -> EosConfig {
+    table.get(m as usize).copied().unwrap_or(*default)
+}
+
+/// `[[material]]`: an equation of state of its own for the particles of regions with
+/// `material = id` (e.g. the triple point's γ = 1.4 region beside γ = 1.5 gas).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialConfig {
+    /// The id regions name in `material`, 1 to 255 (0 is the `[eos]` of the case).
+    pub id: u16,
+    pub eos: EosConfig,
+}
+
 /// Case-file form of the equation of state (`[eos]`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]

@@ -86,6 +86,9 @@ pub struct System<const D: usize> {
     pub frame: Option<crate::boundary::frame::Frame<D>>,
     /// Pressure ports (openings with particle buffers, `boundary::ports`).
     pub ports: Vec<crate::boundary::ports::Port<D>>,
+    /// EOS per material id (`[[material]]`; ids without an entry, and every id when it is
+    /// empty, use `eos`): see [`System::eos_of`].
+    pub material_eos: Vec<EosConfig>,
     /// Driven regions (`boundary::drive`), indexed by `particles.drive` − 1.
     pub drives: Vec<crate::boundary::drive::Drive<D>>,
     /// Time of the state the next evaluation sees (set by the driver: the end of the step
@@ -426,6 +429,11 @@ impl<const D: usize> System<D> {
 
     /// After an evaluation: frozen particles keep still, wall particles record their body's
     /// load and take its rigid motion.
+    /// The EOS of material `m`.
+    pub fn eos_of(&self, m: u16) -> EosConfig {
+        crate::eos::of_material(&self.eos, &self.material_eos, m)
+    }
+
     pub fn hold_constrained(&mut self) {
         self.particles.hold_frozen();
         self.hold_ports();
@@ -435,13 +443,15 @@ impl<const D: usize> System<D> {
     /// P and c_s from the EOS for every particle, then the port condition on buffer particles
     /// and the wall condition on wall particles.
     pub fn update_eos(&mut self) {
-        let eos = self.eos;
+        let (eos, table) = (self.eos, &self.material_eos);
         let p = &mut self.particles;
         p.pressure
             .par_iter_mut()
             .zip(p.sound_speed.par_iter_mut())
             .zip(p.rho.par_iter().zip(p.u.par_iter()))
-            .for_each(|((pr, cs), (&rho, &u))| {
+            .zip(p.material.par_iter())
+            .for_each(|(((pr, cs), (&rho, &u)), &m)| {
+                let eos = crate::eos::of_material(&eos, table, m);
                 *pr = eos.pressure(rho, u);
                 *cs = eos.sound_speed(rho, u);
             });

@@ -254,3 +254,83 @@ fn bad_lattices_and_profiles_are_named() {
         "{e}"
     );
 }
+
+fn two_gases(scheme: &str, gamma_b: f64) -> String {
+    format!(
+        r#"{header}[[material]]
+id = 1
+eos = {{ type = "ideal-gas", gamma = {gamma_b:?} }}
+[scheme]
+name = "{scheme}"
+[time]
+t_end = 0.1
+[[region]]
+min = [0.0, 0.0]
+max = [1.0, 1.0]
+spacing = 0.05
+density = 1.0
+pressure = 1.0
+[[region]]
+min = [0.5, 0.0]
+max = [1.0, 1.0]
+spacing = 0.05
+density = 1.0
+pressure = 1.0
+material = 1
+"#,
+        header = common::header(2, 0.0, 1.0, "periodic", 1.4)
+    )
+}
+
+#[test]
+fn two_materials_each_take_their_own_gamma() {
+    // gas of γ = 1.4 beside gas of γ = 1.67 at the same ρ and P: u differs by the ratio of
+    // (γ − 1), the pressures agree, so the box stays at rest (with one EOS for both the
+    // second half would start at P = 1.67 and push)
+    for scheme in ["crksph", "standard"] {
+        let mut sim = Case::parse(&two_gases(scheme, 5.0 / 3.0))
+            .unwrap()
+            .build::<2>()
+            .unwrap();
+        let p = &sim.sys.particles;
+        for a in 0..p.len() {
+            let g = if p.material[a] == 1 { 5.0 / 3.0 } else { 1.4 };
+            assert!((p.u[a] - 1.0 / (g - 1.0)).abs() < 1e-12, "u {}", p.u[a]);
+            // measured: P within 3e-16 of 1 on this uniform lattice
+            assert!(
+                (p.pressure[a] - 1.0).abs() < 1e-9,
+                "{scheme} P {}",
+                p.pressure[a]
+            );
+        }
+        sim.advance_to(0.1, |_| {}).unwrap();
+        let vmax = sim
+            .sys
+            .particles
+            .vel
+            .iter()
+            .map(|v| v.norm())
+            .fold(0.0, f64::max);
+        println!("{scheme}: two gases at equal pressure, |v| max {vmax:.2e} at t = 0.1");
+        assert!(vmax < 1e-9, "{scheme}: {vmax}");
+    }
+}
+
+#[test]
+fn materials_are_checked() {
+    for (from, to, want) in [
+        ("id = 1", "id = 0", "material[0].id: must be in [1, 255]"),
+        (
+            "gamma = 1.6666666666666667 }",
+            "gamma = 0.5 }",
+            "material[0].eos.gamma",
+        ),
+    ] {
+        let text = two_gases("crksph", 5.0 / 3.0);
+        assert!(text.contains(from), "{from}");
+        let e = Case::parse(&text.replacen(from, to, 1)).unwrap_err().0;
+        assert!(e.contains(want), "{e}");
+    }
+    let e = Case::parse(&two_gases("psph", 5.0 / 3.0)).unwrap_err().0;
+    assert!(e.contains("material[0].eos") && e.contains("psph"), "{e}");
+}

@@ -475,3 +475,51 @@ def entropy_spread(run, args) -> float:
     §4.0.1: the min-to-max entropy error of the Kidder implosion)."""
     _, ratio = entropy_ratio(run, args)
     return float(ratio.max() - ratio.min())
+
+
+def riemann_shock(left: tuple, right: tuple) -> tuple[float, float]:
+    """(p*, speed) of the right-moving shock of the Riemann problem of two ideal gases at rest with
+    different γ, left (ρ, P, γ) at the higher pressure (Toro 2009 §4.2–4.3 with each side's
+    own γ: f_L(p*) + f_R(p*) = 0, the left wave a rarefaction, the right a shock)."""
+    (rl, pl, gl), (rr, pr, gr) = left, right
+    cl = np.sqrt(gl * pl / rl)
+
+    def f_left(p):  # rarefaction (p < pl)
+        return 2 * cl / (gl - 1) * ((p / pl) ** ((gl - 1) / (2 * gl)) - 1)
+
+    def f_right(p):  # shock (p > pr)
+        a, b = 2 / ((gr + 1) * rr), (gr - 1) / (gr + 1) * pr
+        return (p - pr) * np.sqrt(a / (p + b))
+
+    lo, hi = pr, pl
+    for _ in range(200):  # bisection: f_L + f_R rises with p from negative to positive
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if f_left(mid) + f_right(mid) < 0 else (lo, mid)
+    p_star = 0.5 * (lo + hi)
+    cr = np.sqrt(gr * pr / rr)
+    return p_star, float(cr * np.sqrt((gr + 1) / (2 * gr) * p_star / pr + (gr - 1) / (2 * gr)))
+
+
+def snapshot_at(run_dir: Path, t: float) -> dict[str, np.ndarray]:
+    """The snapshot nearest time t."""
+    snaps = snapshots(run_dir)
+    return read_csv(min(snaps, key=lambda s: abs(s[0] - t))[1])
+
+
+@metric
+def wall_shock_error(run, args) -> float:
+    """The largest relative error of the two shock positions along the bottom and top walls
+    at time ``t`` (each the largest x in the band ``band`` = [y_lo, y_hi] where the pressure
+    exceeds the mean of the exact pre- and post-shock values) against the exact two-γ Riemann
+    shocks of ``left`` into ``bottom`` and ``top`` ((ρ, P, γ) each) from ``x0``."""
+    s = snapshot_at(run.dir, args["t"])
+    worst = 0.0
+    for side in ("bottom", "top"):
+        y_lo, y_hi = args[f"{side}_band"]
+        rho, p, g = args[side]
+        p_star, speed = riemann_shock(tuple(args["left"]), (rho, p, g))
+        exact = args["x0"] + speed * args["t"]
+        beyond = (s["y"] > y_lo) & (s["y"] < y_hi) & (s["x"] > args["x0"])
+        x_shock = s["x"][beyond & (s["P"] > 0.5 * (p + p_star))].max()
+        worst = max(worst, abs(x_shock - exact) / (exact - args["x0"]))
+    return float(worst)

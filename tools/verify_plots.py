@@ -311,3 +311,19 @@ def entropy_profile(claim: dict, runs: list, png: Path) -> None:
     axes[0].set_ylabel("entropy P/ρ^γ over the exact s [1]")
     axes[0].legend(fontsize=6)
     finish(plt, fig, claim, png, "Kidder implosion at t = 0.99τ: entropy of the evolved points")
+
+
+@plot
+def triple_point(claim: dict, runs: list, png: Path) -> None:
+    """log10 ρ at t_end of every scheme (Frontiere, Raskin & Owen 2017 Figs 24–27), two per
+    row, the 7 × 3 box each."""
+    best = finest(runs)
+    rows = (len(best) + 1) // 2
+    plt, fig, axes = figure(2, rows, size=(6.4, 3.2))
+    for ax, (scheme, (res, run, _)) in zip(axes, best.items()):
+        s = last_snapshot(run.dir)
+        s["log10 rho"] = np.log10(s["rho"])
+        density_map(ax, s, f"{scheme}: log10 density at t_end", quantity="log10 rho")
+    for ax in axes[len(best):]:
+        ax.set_visible(False)
+    finish(plt, fig, claim, png, "triple point at t = 5 (x, y in m; log10 ρ in kg/m²)")

@@ -136,7 +136,8 @@ impl<const D: usize> System<D> {
             if k == 0 {
                 continue;
             }
-            let (x, v, u) = self.drives[k as usize - 1].state(&p.rest[i], t, &self.eos)?;
+            let eos = crate::eos::of_material(&self.eos, &self.material_eos, p.material[i]);
+            let (x, v, u) = self.drives[k as usize - 1].state(&p.rest[i], t, &eos)?;
             p.pos[i] = x;
             p.vel[i] = v;
             p.u[i] = u;

@@ -360,12 +360,13 @@ pub fn apply_after_density<const D: usize>(
         })
         .collect();
     let domain = sys.domain;
+    let (eos, materials) = (sys.eos, sys.material_eos.clone());
     apply(
         fields,
         Stage::Density,
         &mut sys.particles,
         &region_of,
-        &sys.eos,
+        &|m| crate::eos::of_material(&eos, &materials, m),
         &domain,
     )?;
     Ok(true)
@@ -378,7 +379,7 @@ pub fn apply<const D: usize>(
     stage: Stage,
     p: &mut Particles<D>,
     region_of: &[usize],
-    eos: &EosConfig,
+    eos_of: &dyn Fn(u16) -> EosConfig,
     domain: &Domain<D>,
 ) -> Result<(), CaseError> {
     for (i, f) in fields.iter().enumerate() {
@@ -396,6 +397,7 @@ pub fn apply<const D: usize>(
                 }
             }
             let x = p.pos[a];
+            let eos = eos_of(p.material[a]);
             let pressure = eos.pressure(p.rho[a], p.u[a]);
             let mut own = [0.0; 10];
             for k in 0..D {

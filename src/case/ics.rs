@@ -310,8 +310,9 @@ struct State<const D: usize> {
 }
 
 fn state_of<const D: usize>(case: &Case, r: &Region, x: &Vector<D>, rho: f64) -> State<D> {
+    let eos = case.eos_of(r.material);
     let u = match (r.pressure, r.internal_energy) {
-        (Some(p), _) => case.eos.internal_energy(rho, p),
+        (Some(p), _) => eos.internal_energy(rho, p),
         (_, Some(u)) => u,
         _ => 0.0,
     };
@@ -344,10 +345,10 @@ fn state_of<const D: usize>(case: &Case, r: &Region, x: &Vector<D>, rho: f64) ->
             let top: f64 = (0..D).map(|k| (g[k] * lo[k]).min(g[k] * hi[k])).sum();
             let depth = (g.dot(x) - top) / g.norm().max(1e-300);
             let p = p0 + rho * g.norm() * depth.max(0.0);
-            rho = case.eos.density_at(p, u).unwrap_or(rho);
-            u = match case.eos {
+            rho = eos.density_at(p, u).unwrap_or(rho);
+            u = match eos {
                 crate::eos::EosConfig::Tait { .. } | crate::eos::EosConfig::Isothermal { .. } => u,
-                _ => case.eos.internal_energy(rho, p),
+                _ => eos.internal_energy(rho, p),
             };
         }
     }
@@ -356,7 +357,7 @@ fn state_of<const D: usize>(case: &Case, r: &Region, x: &Vector<D>, rho: f64) ->
         vel[0] += v[0];
         vel[1] += v[1];
         let rr = (x[0] - g.center[0]).hypot(x[1] - g.center[1]);
-        u = case.eos.internal_energy(rho, g.pressure(rr));
+        u = eos.internal_energy(rho, g.pressure(rr));
     }
     State { rho, u, vel }
 }
@@ -501,11 +502,13 @@ pub fn generate_particles<const D: usize>(
             );
             let w = 1.0 / (1.0 + (-(x[f.axis] - f.position) / f.width).exp());
             let rho = sl.rho + (sr.rho - sl.rho) * w;
-            let pl = case.eos.pressure(sl.rho, sl.u);
-            let pr = case.eos.pressure(sr.rho, sr.u);
+            // an interface smooths within one material: the particle's own EOS
+            let eos = case.eos_of(p.material[i]);
+            let pl = eos.pressure(sl.rho, sl.u);
+            let pr = eos.pressure(sr.rho, sr.u);
             let pres = pl + (pr - pl) * w;
             p.u[i] = match (case.regions[il].pressure, case.regions[ir].pressure) {
-                (Some(_), Some(_)) => case.eos.internal_energy(rho, pres),
+                (Some(_), Some(_)) => eos.internal_energy(rho, pres),
                 _ => sl.u + (sr.u - sl.u) * w,
             };
             p.vel[i] = sl.vel + (sr.vel - sl.vel) * w;
@@ -551,7 +554,7 @@ pub fn generate_particles<const D: usize>(
         super::fields::Stage::Initial,
         &mut p,
         &region_of,
-        &case.eos,
+        &|m| case.eos_of(m),
         domain,
     )?;
     let bodies = if bodies_later {

@@ -101,6 +101,9 @@ pub struct Case {
     /// Run in a moving (non-inertial) frame, e.g. a tank's: see `boundary::frame`.
     #[serde(default)]
     pub frame: Option<crate::boundary::frame::FrameConfig>,
+    /// Equations of state of their own for materials other than 0 (`[eos]`).
+    #[serde(default, rename = "material")]
+    pub materials: Vec<crate::eos::MaterialConfig>,
     /// Openings in bodies where an outside model sets the pressure (`boundary::ports`).
     #[serde(default, rename = "port")]
     pub ports: Vec<PortConfig>,
@@ -326,6 +329,20 @@ impl Case {
         Ok(sim)
     }
 
+    /// The EOS of material `m`: its `[[material]]` entry, else `[eos]`.
+    pub fn eos_of(&self, m: u16) -> EosConfig {
+        self.materials
+            .iter()
+            .find(|e| e.id == m)
+            .map_or(self.eos, |e| e.eos)
+    }
+
+    /// EOS by material id up to the largest id with an entry (empty without `[[material]]`).
+    fn material_table(&self) -> Vec<EosConfig> {
+        let top = self.materials.iter().map(|e| e.id).max();
+        top.map_or(vec![], |t| (0..=t).map(|m| self.eos_of(m)).collect())
+    }
+
     /// Driven regions in region order: region `ri`'s particles carry `drive_tag(ri)`.
     fn drives<const D: usize>(&self) -> Result<Vec<crate::boundary::drive::Drive<D>>, CaseError> {
         self.regions
@@ -420,6 +437,7 @@ impl Case {
             frame: self.frame.as_ref().map(|f| f.build::<D>()),
             ports,
             drives: self.drives::<D>()?,
+            material_eos: self.material_table(),
             time: 0.0,
         })
     }

@@ -34,6 +34,7 @@ impl Case {
             )));
         }
         self.eos.validate()?;
+        self.validate_materials()?;
         self.limits.validate()?;
         let eta = self.eta()?;
         if !(eta.is_finite() && (0.5..=5.0).contains(&eta)) {
@@ -343,5 +344,44 @@ impl Case {
                 )
             }
         }
+    }
+}
+
+impl Case {
+    /// `[[material]]`: ids 1–255, each once, a valid EOS; schemes that read one EOS-wide
+    /// constant (PSPH's γ, Rosswog's pressure offset for X = P^k) need it shared.
+    fn validate_materials(&self) -> Result<(), CaseError> {
+        for (k, m) in self.materials.iter().enumerate() {
+            if !(1..=255).contains(&m.id) {
+                return Err(CaseError(format!(
+                    "material[{k}].id: must be in [1, 255] (0 is the case's [eos]), got {}",
+                    m.id
+                )));
+            }
+            if self.materials[..k].iter().any(|o| o.id == m.id) {
+                return Err(CaseError(format!(
+                    "material[{k}].id: {} is given twice",
+                    m.id
+                )));
+            }
+            m.eos
+                .validate()
+                .map_err(|e| CaseError(format!("material[{k}].{e}")))?;
+            if matches!(self.scheme, SchemeConfig::Psph(_)) && m.eos != self.eos {
+                return Err(CaseError(format!(
+                    "material[{k}].eos: \"psph\" sums one pressure-entropy field with one γ; every material needs the case's [eos]"
+                )));
+            }
+            if self.scheme.rosswog().is_some()
+                && m.eos.pressure_offset() != self.eos.pressure_offset()
+            {
+                return Err(CaseError(format!(
+                    "material[{k}].eos: Rosswog's X = P^k needs one pressure offset for all materials ({} here, {} for [eos])",
+                    m.eos.pressure_offset(),
+                    self.eos.pressure_offset()
+                )));
+            }
+        }
+        Ok(())
     }
 }

@@ -64,10 +64,9 @@ impl<const D: usize> Saved<D> {
 
     fn save_entropy(&mut self, sys: &System<D>) {
         let p = &sys.particles;
-        let eos = sys.eos;
         self.entropy = (0..p.len())
             .into_par_iter()
-            .map(|i| eos.entropy_proxy(p.rho[i], p.u[i]))
+            .map(|i| sys.eos_of(p.material[i]).entropy_proxy(p.rho[i], p.u[i]))
             .collect();
     }
 }

@@ -196,7 +196,7 @@ impl SchemeConfig {
         )
     }
 
-    fn rosswog(&self) -> Option<(rosswog::Preset, rosswog::RosswogOverrides)> {
+    pub fn rosswog(&self) -> Option<(rosswog::Preset, rosswog::RosswogOverrides)> {
         use rosswog::Preset;
         match *self {
             SchemeConfig::RosswogF1(o) => Some((Preset::F1, o)),
