@@ -173,7 +173,7 @@ impl<const D: usize> Particles<D> {
                 self.acc[i] = Vector::zeros();
                 self.dudt[i] = 0.0;
                 self.drhodt[i] = 0.0;
-                if self.drive.get(i).is_none_or(|&k| k == 0) {
+                if self.drive[i] == 0 {
                     self.vel[i] = Vector::zeros();
                 }
             }

@@ -131,6 +131,14 @@ def density_map(ax, s: dict, title: str, quantity: str = "rho") -> None:
     ax.figure.colorbar(sc, ax=ax, shrink=0.8, label=quantity)
 
 
+def judged_density_map(ax, claim: dict, runs: list) -> None:
+    """The density map at t_end of the scheme the claim's first judge reads (finest run)."""
+    judged = claim_scheme(claim)
+    best = finest(runs).get(judged)
+    if best:
+        density_map(ax, last_snapshot(best[1].dir), f"{judged}: density at t_end")
+
+
 @plot
 def mode_growth(claim: dict, runs: list, png: Path) -> None:
     """KH or RT: the mode amplitude against t per scheme and resolution (log axis), the linear-theory
@@ -241,10 +249,7 @@ def shock_radius_angle(claim: dict, runs: list, png: Path) -> None:
     ax_r.set_xlabel("angle φ (degrees; grey: every 60°)")
     ax_r.set_ylabel("shock radius − its mean")
     ax_r.legend(fontsize=6)
-    judged = claim_scheme(claim)
-    best = finest(runs).get(judged)
-    if best:
-        density_map(ax_m, last_snapshot(best[1].dir), f"{judged}: density at t_end")
+    judged_density_map(ax_m, claim, runs)
     finish(plt, fig, claim, png, "blast in a box: the lattice's imprint on the shock")
 
 
@@ -288,10 +293,7 @@ def cloud_mass(claim: dict, runs: list, png: Path) -> None:
     ax.set_xlabel("t / τ_KH")
     ax.set_ylabel("cloud mass fraction M(t)/M0")
     ax.legend(fontsize=6)
-    judged = claim_scheme(claim)
-    best = finest(runs).get(judged)
-    if best:
-        density_map(ax_m, last_snapshot(best[1].dir), f"{judged}: density at t_end")
+    judged_density_map(ax_m, claim, runs)
     finish(plt, fig, claim, png, "blob: cloud mass against time")
 
 

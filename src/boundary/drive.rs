@@ -18,8 +18,9 @@
 //! specific energy is u = u(ρ, P) of the EOS from the given density and pressure. The density
 //! the scheme sums (or evolves) stays the scheme's: *decision*, so that a driven particle's
 //! pressure P(ρ_sum, u) is what a fluid particle in its place would have, and the boundary
-//! carries no density jump of its own. Driven particles are also `frozen` (no derivative
-//! moves them; the compatible energy update gives them no share of the pair work).
+//! carries no density jump of its own. Driven particles are also `frozen`: no derivative
+//! moves them, and the compatible energy update drops their share of the pair work (the
+//! compression work on the boundary itself, which their imposed u replaces).
 
 use crate::case::fields::TimeFormula;
 use crate::case::CaseError;

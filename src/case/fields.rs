@@ -135,11 +135,8 @@ pub struct CompiledFormula {
 impl CompiledFormula {
     /// The value at x (coordinates beyond the case's dimension are 0).
     pub fn at(&self, x: &[f64]) -> Result<f64, CaseError> {
-        let mut own = [0.0; 10];
-        own[..x.len()].copy_from_slice(x);
-        own[3] = x.iter().map(|v| v * v).sum::<f64>().sqrt();
         self.c
-            .eval(&own)
+            .eval(&position_variables(x))
             .map_err(|e| CaseError(format!("{}: at x = {x:?}: {e}", self.key)))
     }
 }
@@ -181,26 +178,23 @@ impl TimeFormula {
     /// The value for rest position x at time t (coordinates beyond the case's dimension are
     /// 0); an evaluation error or a non-finite value is an error naming the key, x and t.
     pub fn at(&self, x: &[f64], t: f64) -> Result<f64, String> {
-        let mut own = [0.0; 10];
-        own[..x.len()].copy_from_slice(x);
-        own[3] = x.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let n = own.len();
-        let args: Vec<f64> = self
-            .c
-            .slots
-            .iter()
-            .map(|&s| match s {
-                s if s < n => own[s],
-                s if s - n == self.t_slot => t,
-                s => self.c.params[s - n],
-            })
-            .collect();
-        match self.c.expr.eval(&args) {
+        let mut params = self.c.params.clone();
+        params[self.t_slot] = t;
+        match self.c.eval_with(&position_variables(x), &params) {
             Ok(v) if v.is_finite() => Ok(v),
             Ok(v) => Err(format!("{} is {v} at x = {x:?}, t = {t}", self.key)),
             Err(e) => Err(format!("{}: at x = {x:?}, t = {t}: {e}", self.key)),
         }
     }
+}
+
+/// The own variables of a formula of position alone: x, y, z (those beyond the case's
+/// dimension 0) and r; the state variables stay 0.
+fn position_variables(x: &[f64]) -> [f64; 10] {
+    let mut own = [0.0; 10];
+    own[..x.len()].copy_from_slice(x);
+    own[3] = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+    own
 }
 
 /// Names of the particle's own variables, in the order of [`Vars::values`].
@@ -218,6 +212,11 @@ struct Compiled {
 impl Compiled {
     /// The value with the particle's own variables `own` (in [`VARIABLES`] order).
     fn eval(&self, own: &[f64; 10]) -> Result<f64, exmex::ExError> {
+        self.eval_with(own, &self.params)
+    }
+
+    /// [`Self::eval`] with other parameter values (same order as `params`).
+    fn eval_with(&self, own: &[f64; 10], params: &[f64]) -> Result<f64, exmex::ExError> {
         let args: Vec<f64> = self
             .slots
             .iter()
@@ -225,7 +224,7 @@ impl Compiled {
                 if s < own.len() {
                     own[s]
                 } else {
-                    self.params[s - own.len()]
+                    params[s - own.len()]
                 }
             })
             .collect();
@@ -360,13 +359,12 @@ pub fn apply_after_density<const D: usize>(
         })
         .collect();
     let domain = sys.domain;
-    let (eos, materials) = (sys.eos, sys.material_eos.clone());
     apply(
         fields,
         Stage::Density,
         &mut sys.particles,
         &region_of,
-        &|m| crate::eos::of_material(&eos, &materials, m),
+        &|m| crate::eos::of_material(&sys.eos, &sys.material_eos, m),
         &domain,
     )?;
     Ok(true)

@@ -33,12 +33,13 @@ fn positive(what: &str, v: &[f64]) -> Result<(), String> {
 }
 
 /// Every per-particle array has `n` entries, with finite values, positive masses, densities
-/// and smoothing lengths, body and port numbers the case has, and the scheme's extra slots.
+/// and smoothing lengths, body, port and driven-region numbers the case has, and the scheme's extra slots.
 fn particles<const D: usize>(
     p: &Particles<D>,
     now: &Particles<D>,
     bodies: usize,
     ports: usize,
+    drives: usize,
 ) -> Result<(), String> {
     let n = p.len();
     let lens = [
@@ -112,8 +113,7 @@ fn particles<const D: usize>(
             p.port[i]
         ));
     }
-    let drives = now.drive.iter().copied().max().unwrap_or(0);
-    if let Some(i) = p.drive.iter().position(|&k| k > drives) {
+    if let Some(i) = p.drive.iter().position(|&k| k as usize > drives) {
         return Err(format!(
             "particle {i} belongs to driven region {} of {drives}",
             p.drive[i]
@@ -175,7 +175,13 @@ pub(super) fn check<const D: usize>(s: &Saved<D>, c: &Coupled<D>) -> Result<(), 
             sys.ports.len()
         ));
     }
-    particles(&s.particles, &sys.particles, s.bodies.len(), s.ports.len())?;
+    particles(
+        &s.particles,
+        &sys.particles,
+        s.bodies.len(),
+        s.ports.len(),
+        sys.drives.len(),
+    )?;
     for (b, now) in s.bodies.iter().zip(&sys.bodies) {
         let what = format!("body {:?}", now.name);
         if b.name != now.name {
