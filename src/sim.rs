@@ -97,6 +97,8 @@ pub struct Diagnostics {
     pub potential_energy: f64,
     /// Kinetic + internal + potential.
     pub total_energy: f64,
+    /// The largest Lorentz factor of the fluid (1 in Newtonian runs).
+    pub max_lorentz: f64,
 }
 
 pub struct Simulation<const D: usize> {
@@ -304,6 +306,9 @@ impl<const D: usize> Simulation<D> {
     }
 
     pub fn diagnostics(&self) -> Diagnostics {
+        if let Some(sr) = self.sys.relativistic {
+            return self.relativistic_diagnostics(sr);
+        }
         let p = &self.sys.particles;
         let mut d = Diagnostics {
             time: self.time,
@@ -341,6 +346,45 @@ impl<const D: usize> Simulation<D> {
             d.potential_energy -= m * g.dot(&x);
         }
         d.total_energy = d.kinetic_energy + d.internal_energy + d.potential_energy;
+        d.max_lorentz = 1.0;
+        d
+    }
+
+    /// The conserved totals of a special-relativistic run (Rosswog (2015) Eqs. 54, 56):
+    /// momentum Σ ν S, angular momentum Σ ν x × S, and energy Σ ν (ε − 1), the rest-mass
+    /// energy Σ ν left out so that it tends to the Newtonian Σ m(½v² + u). Of it, kinetic is
+    /// Σ ν (γ − 1) and internal the rest.
+    fn relativistic_diagnostics(&self, sr: crate::scheme::rosswog::sr::SrSlots) -> Diagnostics {
+        let p = &self.sys.particles;
+        let mut d = Diagnostics {
+            time: self.time,
+            step: self.steps,
+            dt: self.last_dt,
+            particles: p.len(),
+            max_lorentz: 1.0,
+            ..Default::default()
+        };
+        let (s, eps, lorentz) = (
+            &p.extra_vectors[sr.momentum],
+            &p.extra_scalars[sr.energy],
+            &p.extra_scalars[sr.lorentz],
+        );
+        for a in 0..p.len() {
+            d.fluid_particles += 1;
+            let nu = p.mass[a];
+            d.mass += nu;
+            for k in 0..D {
+                d.momentum[k] += nu * s[a][k];
+            }
+            let l = to3(&p.pos[a]).cross(&to3(&s[a])) * nu;
+            for k in 0..3 {
+                d.angular_momentum[k] += l[k];
+            }
+            d.total_energy += nu * (eps[a] - 1.0);
+            d.kinetic_energy += nu * (lorentz[a] - 1.0);
+            d.max_lorentz = d.max_lorentz.max(lorentz[a]);
+        }
+        d.internal_energy = d.total_energy - d.kinetic_energy;
         d
     }
 }

@@ -38,6 +38,17 @@ pub struct EvalStats {
     pub seconds_density: f64,
     pub seconds_gradients: f64,
     pub seconds_forces: f64,
+    /// Special-relativistic primitive recoveries (Rosswog (2015) Eqs. 97–99) over the run:
+    /// particle recoveries, their Newton–Raphson iterations (sum and largest), and the
+    /// recoveries that fell back to the cold state (no root with u ≥ 0).
+    #[serde(default)]
+    pub sr_recoveries: u64,
+    #[serde(default)]
+    pub sr_recovery_iterations: u64,
+    #[serde(default)]
+    pub sr_recovery_max_iterations: u64,
+    #[serde(default)]
+    pub sr_recovery_fallbacks: u64,
 }
 
 /// One neighbour seen from particle a.
@@ -94,6 +105,10 @@ pub struct System<const D: usize> {
     /// Time of the state the next evaluation sees (set by the driver: the end of the step
     /// being taken), for time-dependent boundary values (port pressures).
     pub time: f64,
+    /// Set by a special-relativistic scheme (`scheme::rosswog::sr`): where the particles keep
+    /// the canonical momentum S and energy ε per baryon that the integrator evolves in place
+    /// of v and u, and their Lorentz factors. `None` in Newtonian runs.
+    pub relativistic: Option<crate::scheme::rosswog::sr::SrSlots>,
 }
 
 /// A neighbour list with a skin, the positions and radii it was built for.

@@ -434,6 +434,7 @@ impl Case {
             bodies,
             evolve_density: false,
             wall_pairs: false,
+            relativistic: None,
             frame: self.frame.as_ref().map(|f| f.build::<D>()),
             ports,
             drives: self.drives::<D>()?,

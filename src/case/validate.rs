@@ -58,6 +58,9 @@ impl Case {
                     .into(),
             ));
         }
+        if self.scheme.relativistic() {
+            self.validate_relativistic()?;
+        }
         // rpSPH's force sees pressure differences only (Abel 2011 eq. 4) and is not
         // antisymmetric: the load on a body would miss the ambient pressure and not be the
         // reaction of what the fluid receives (measured: a closed tank read −0.05 of its weight)
@@ -350,6 +353,79 @@ impl Case {
 impl Case {
     /// `[[material]]`: ids 1–255, each once, a valid EOS; schemes that read one EOS-wide
     /// constant (PSPH's γ, Rosswog's pressure offset for X = P^k) need it shared.
+    /// What the special-relativistic presets (c = 1, Rosswog (2015) Sec. 6) can run: an ideal
+    /// gas (Eq. 62) in a box, stepped by SSP-RK3, with rest-frame states n > 0, P > 0 and
+    /// |v| < 1. Bodies, ports, drives, materials, gravity and moving frames have no SR form
+    /// here.
+    fn validate_relativistic(&self) -> Result<(), CaseError> {
+        let name = "the rosswog-sr presets";
+        if !matches!(self.eos, EosConfig::IdealGas { .. }) {
+            return Err(CaseError(format!(
+                "eos.type: {name} need eos.type = \"ideal-gas\" (P = (Γ − 1) n u, Rosswog (2015) Eq. 62)"
+            )));
+        }
+        let refuse = |what: &str, present: bool| -> Result<(), CaseError> {
+            if present {
+                Err(CaseError(format!("{what}: {name} have no special-relativistic form of it; remove it or use a Newtonian scheme")))
+            } else {
+                Ok(())
+            }
+        };
+        refuse("body", !self.bodies.is_empty())?;
+        refuse("port", !self.ports.is_empty())?;
+        refuse("material", !self.materials.is_empty())?;
+        refuse("frame", self.frame.is_some())?;
+        refuse(
+            "gravity",
+            self.gravity.as_ref().is_some_and(|g| g.iter().any(|x| *x != 0.0)),
+        )?;
+        if self.integrator() != crate::integrate::IntegratorKind::SspRk3 {
+            return Err(CaseError(format!(
+                "time.integrator: {name} evolve S and ε with \"ssp-rk3\" only (Rosswog (2015) Sec. 6.5), got \"{}\"",
+                self.integrator().name()
+            )));
+        }
+        for (i, r) in self.regions.iter().enumerate() {
+            refuse(&format!("region[{i}].drive"), r.drive.is_some())?;
+            refuse(&format!("region[{i}].gresho"), r.gresho.is_some())?;
+            refuse(&format!("region[{i}].hydrostatic"), r.hydrostatic)?;
+            if let Some(v) = &r.velocity {
+                let speed = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+                if !(speed < 1.0) {
+                    return Err(CaseError(format!(
+                        "region[{i}].velocity: |v| must be < 1 (the speed of light, c = 1) with {name}, got {speed}"
+                    )));
+                }
+            }
+            if let Some(vr) = r.radial_velocity {
+                if !(vr.abs() < 1.0) {
+                    return Err(CaseError(format!(
+                        "region[{i}].radial_velocity: must be in (−1, 1) (c = 1) with {name}, got {vr}"
+                    )));
+                }
+            }
+            match (r.pressure, r.internal_energy) {
+                (Some(p), _) if !(p.is_finite() && p > 0.0) => {
+                    return Err(CaseError(format!(
+                        "region[{i}].pressure: must be a finite number > 0 with {name} (X = P^k and the primitive recovery), got {p}"
+                    )))
+                }
+                (None, Some(u)) if !(u.is_finite() && u > 0.0) => {
+                    return Err(CaseError(format!(
+                        "region[{i}].internal_energy: must be a finite number > 0 with {name}, got {u}"
+                    )))
+                }
+                (None, None) => {
+                    return Err(CaseError(format!(
+                        "region[{i}].pressure: {name} need a pressure (> 0) in every region"
+                    )))
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
     fn validate_materials(&self) -> Result<(), CaseError> {
         for (k, m) in self.materials.iter().enumerate() {
             if !(1..=255).contains(&m.id) {

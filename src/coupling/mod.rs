@@ -210,6 +210,11 @@ impl Coupling {
     /// Build the solver for `case` with `options` (particles, first evaluation).
     pub fn new(case: &Case, options: &CouplingOptions) -> Result<Self, CouplingError> {
         let case = options.apply(case)?;
+        if case.scheme.relativistic() {
+            return Err(CouplingError(
+                "scheme.name: the rosswog-sr presets (special relativity, c = 1) run in the CLI only (`sphfmu run`); a co-simulation needs a Newtonian scheme".into(),
+            ));
+        }
         let threads = if options.threads == 0 {
             std::thread::available_parallelism()
                 .map(|n| n.get())

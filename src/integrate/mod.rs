@@ -49,6 +49,11 @@ struct Saved<const D: usize> {
     rho: Vec<f64>,
     /// Start-of-step entropy proxies (compatible energy update only).
     entropy: Vec<Option<f64>>,
+    /// Canonical momentum S and energy ε per baryon (special-relativistic schemes only).
+    #[serde(default)]
+    momentum: Vec<Vector<D>>,
+    #[serde(default)]
+    energy: Vec<f64>,
 }
 
 impl<const D: usize> Saved<D> {
@@ -59,6 +64,10 @@ impl<const D: usize> Saved<D> {
         self.u.clone_from(&p.u);
         if sys.evolve_density {
             self.rho.clone_from(&p.rho);
+        }
+        if let Some(sr) = sys.relativistic {
+            self.momentum.clone_from(&p.extra_vectors[sr.momentum]);
+            self.energy.clone_from(&p.extra_scalars[sr.energy]);
         }
     }
 
@@ -87,7 +96,8 @@ impl<const D: usize> Integrator<D> {
             .iter()
             .chain(&s.vel)
             .all(|x| x.iter().all(|c| c.is_finite()))
-            && s.u.iter().chain(&s.rho).all(|x| x.is_finite())
+            && s.momentum.iter().all(|x| x.iter().all(|c| c.is_finite()))
+            && s.u.iter().chain(&s.rho).chain(&s.energy).all(|x| x.is_finite())
             && s.entropy.iter().flatten().all(|x| x.is_finite());
         if ok {
             Ok(())
@@ -97,8 +107,11 @@ impl<const D: usize> Integrator<D> {
     }
 }
 
-/// U ← c0·U0 + c1·(U + dt·L(U)) on (x, v, u).
+/// U ← c0·U0 + c1·(U + dt·L(U)) on (x, v, u), or on (x, S, ε) in special-relativistic runs.
 fn combine<const D: usize>(sys: &mut System<D>, s0: &Saved<D>, c0: f64, c1: f64, dt: f64) {
+    if let Some(sr) = sys.relativistic {
+        return combine_canonical(sys, s0, sr, c0, c1, dt);
+    }
     let p = &mut sys.particles;
     let (acc, dudt) = (&p.acc, &p.dudt);
     p.pos
@@ -114,6 +127,32 @@ fn combine<const D: usize>(sys: &mut System<D>, s0: &Saved<D>, c0: f64, c1: f64,
             *v = s0.vel[i] * c0 + vn * c1;
             *u = s0.u[i] * c0 + un * c1;
         });
+}
+
+/// The SR form of [`combine`] (Rosswog (2015) Sec. 6.5): S advances with `acc` = dS/dt, ε
+/// with `dudt` = dε/dt, x with the velocity the latest evaluation recovered (dx/dt = v).
+/// v and u stay as they are until the next evaluation recovers them from S, ε and N.
+fn combine_canonical<const D: usize>(
+    sys: &mut System<D>,
+    s0: &Saved<D>,
+    sr: crate::scheme::rosswog::sr::SrSlots,
+    c0: f64,
+    c1: f64,
+    dt: f64,
+) {
+    let p = &mut sys.particles;
+    let (acc, dedt, vel) = (&p.acc, &p.dudt, &p.vel);
+    p.pos.par_iter_mut().enumerate().for_each(|(i, x)| {
+        *x = s0.pos[i] * c0 + (*x + vel[i] * dt) * c1;
+    });
+    p.extra_vectors[sr.momentum]
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(i, s)| *s = s0.momentum[i] * c0 + (*s + acc[i] * dt) * c1);
+    p.extra_scalars[sr.energy]
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(i, e)| *e = s0.energy[i] * c0 + (*e + dedt[i] * dt) * c1);
 }
 
 /// ρ ← c0·ρ0 + c1·(ρ + dt·dρ/dt), when the scheme evolves ρ (`ρ0` = `s0`).
@@ -149,13 +188,29 @@ fn stage_time<const D: usize>(sys: &mut System<D>, t: f64) -> Result<(), SchemeE
     sys.apply_drives().map_err(SchemeError)
 }
 
+/// Wrap periodic and reflect mirrored coordinates; a reflection reverses the normal velocity
+/// and, in SR runs, the normal component of S with it.
 fn enforce_boundaries<const D: usize>(sys: &mut System<D>) {
     let dom = sys.domain;
     let p = &mut sys.particles;
-    p.pos
-        .par_iter_mut()
-        .zip(p.vel.par_iter_mut())
-        .for_each(|(x, v)| dom.enforce(x, v));
+    match sys.relativistic {
+        None => p
+            .pos
+            .par_iter_mut()
+            .zip(p.vel.par_iter_mut())
+            .for_each(|(x, v)| dom.enforce(x, v)),
+        Some(sr) => p
+            .pos
+            .par_iter_mut()
+            .zip(p.vel.par_iter_mut())
+            .zip(p.extra_vectors[sr.momentum].par_iter_mut())
+            .for_each(|((x, v), s)| {
+                // S decides the direction (v is the previous stage's until the recovery)
+                let mut x_s = *x;
+                dom.enforce(&mut x_s, s);
+                dom.enforce(x, v);
+            }),
+    }
 }
 
 impl<const D: usize> Integrator<D> {
@@ -177,6 +232,12 @@ impl<const D: usize> Integrator<D> {
     ) -> Result<(), SchemeError> {
         let t_end = sys.time;
         let t0 = t_end - dt;
+        if sys.relativistic.is_some() && self.kind != IntegratorKind::SspRk3 {
+            return Err(SchemeError(format!(
+                "time.integrator: special-relativistic runs evolve S and ε with ssp-rk3 only, got {}",
+                self.kind.name()
+            )));
+        }
         match self.kind {
             IntegratorKind::Leapfrog => {
                 let half = 0.5 * dt;

@@ -132,6 +132,22 @@ pub struct RunSummary {
     /// The builds of `neighbour_list_builds` made within an h solve because a smoothing
     /// length outgrew its listed reach (the rest: particles moved through the skin).
     pub h_growth_rebuilds: u64,
+    /// Special-relativistic runs: the primitive recoveries (Rosswog (2015) Eqs. 97–99).
+    pub relativistic: Option<RecoverySummary>,
+}
+
+/// The primitive recoveries of a special-relativistic run and the largest Lorentz factor.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct RecoverySummary {
+    /// Particle recoveries over the run (every density pass of every evaluation).
+    pub recoveries: u64,
+    /// Mean and largest Newton–Raphson iterations per recovery.
+    pub mean_iterations: f64,
+    pub max_iterations: u64,
+    /// Recoveries with no root at u ≥ 0, taken at the cold state (u floored) instead.
+    pub fallbacks: u64,
+    /// The largest Lorentz factor at the end and over the recorded diagnostics.
+    pub max_lorentz: f64,
 }
 
 /// Which external impulses act on the fluid, and so what its momentum change means.
@@ -265,6 +281,7 @@ fn run_dim<const D: usize>(
     let mut snap_index = 1u64;
     let mut diag_err = None;
     let mut max_abs_momentum: f64 = 0.0;
+    let mut max_lorentz: f64 = initial.max_lorentz;
     let mut gravity_impulse = [0.0f64; 3];
     let mut t_prev = sim.time;
     let result = (|| -> Result<(), RunError> {
@@ -281,12 +298,14 @@ fn run_dim<const D: usize>(
             sim.advance_to(target, |s| {
                 updates += s.sys.particles.len() as f64;
                 let p = &s.sys.particles;
-                // Σ m|v| and the mass of the fluid, in one pass
+                // Σ m|v| (SR: Σ ν|S|) and the mass of the fluid, in one pass
+                let momentum = |i: usize| match s.sys.relativistic {
+                    Some(sr) => p.extra_vectors[sr.momentum][i].norm(),
+                    None => p.vel[i].norm(),
+                };
                 let (scale, mass) = (0..p.len())
                     .filter(|&i| p.body[i] == 0 && p.port[i] == 0)
-                    .fold((0.0, 0.0), |(s, m), i| {
-                        (s + p.mass[i] * p.vel[i].norm(), m + p.mass[i])
-                    });
+                    .fold((0.0, 0.0), |(s, m), i| (s + p.mass[i] * momentum(i), m + p.mass[i]));
                 max_abs_momentum = max_abs_momentum.max(scale);
                 // every integrator applies g over the whole step: Σ_steps M g dt exactly (the
                 // step's own dt: last_dt skips the shortened steps that land on a target)
@@ -296,7 +315,9 @@ fn run_dim<const D: usize>(
                     *g += mass * s.sys.gravity[k] * dt;
                 }
                 if s.steps % case.output.diagnostics_every == 0 {
-                    if let Err(e) = diag.record(&s.diagnostics()) {
+                    let d = s.diagnostics();
+                    max_lorentz = max_lorentz.max(d.max_lorentz);
+                    if let Err(e) = diag.record(&d) {
                         diag_err.get_or_insert(io_err(&diag_path, e));
                     }
                     loads.record(s);
@@ -394,6 +415,17 @@ fn run_dim<const D: usize>(
         mean_h_iterations: sim.sys.stats.h_iterations_total / sim.sys.stats.h_solves.max(1) as f64,
         neighbour_list_builds: sim.sys.verlet.builds,
         h_growth_rebuilds: sim.sys.stats.list_rebuilds,
+        relativistic: sim.sys.relativistic.map(|_| {
+            let st = &sim.sys.stats;
+            RecoverySummary {
+                recoveries: st.sr_recoveries,
+                mean_iterations: st.sr_recovery_iterations as f64
+                    / st.sr_recoveries.max(1) as f64,
+                max_iterations: st.sr_recovery_max_iterations,
+                fallbacks: st.sr_recovery_fallbacks,
+                max_lorentz: max_lorentz.max(last.max_lorentz),
+            }
+        }),
     };
     if summary.momentum_check != MomentumCheck::Boundaries {
         let r: f64 = (0..3)

@@ -74,13 +74,17 @@ pub trait Scheme<const D: usize>: Send + Sync {
 /// Every scheme preset (`scheme.name`) with what it is, for `--help` and the case reference.
 /// Each preset's kernel, η, integrator and Courant factor come from [`SchemeConfig`] itself
 /// (`preferred_kernel`, `preferred_integrator`); a unit test checks each name parses.
-pub const PRESETS: [(&str, &str); 10] = [
+pub const PRESETS: [(&str, &str); 14] = [
     ("standard", "traditional grad-h SPH, Monaghan-Gingold viscosity (alpha, beta) with the Balsara switch, optional Price conductivity; density summation or continuity (liquids; delta-SPH), laminar viscosity"),
     ("rpsph", "relative-pressure SPH (Abel 2011): the standard passes with the pressure differences P_b - P_a in the force; gradient = symmetric (default) | own-h, energy = entropy (default) | eq18, shock_switch"),
     ("rosswog-f1", "Rosswog 2015 F1: integral-approximation gradients, volume element X = P^k (k = 0.05), triggered dissipation (shock and noise triggers)"),
     ("rosswog-f2", "as F1 with kernel gradients and grad-h terms"),
     ("rosswog-f3", "as F1 with X = m"),
     ("rosswog-f4", "kernel gradients, X = m, constant dissipation K = 1: 'standard SPH' of the paper"),
+    ("rosswog-sr-f1", "special-relativistic F1 (Rosswog 2015 Sec. 6, c = 1): canonical momentum and energy per baryon, primitive recovery, relativistic signal speeds; states given as rest-frame density, pressure and velocity; ideal gas, ssp-rk3, CLI only"),
+    ("rosswog-sr-f2", "special-relativistic F2 (kernel gradients, grad-h, X = P^k)"),
+    ("rosswog-sr-f3", "special-relativistic F3 (IA gradients, X = baryon number)"),
+    ("rosswog-sr-f4", "special-relativistic F4 (kernel gradients, X = baryon number, constant K = 1)"),
     ("crksph", "CRKSPH (Frontiere, Raskin & Owen 2017): linear reproducing kernels, compatible energy, limited viscosity"),
     ("compsph", "compatibly differenced SPH (the CRKSPH paper's App. E): energy conserved to round-off"),
     ("compsph-cullen", "compsph with the Cullen-Dehnen viscosity switch (App. F)"),
@@ -105,6 +109,15 @@ pub enum SchemeConfig {
     RosswogF3(rosswog::RosswogOverrides),
     #[serde(rename = "rosswog-f4")]
     RosswogF4(rosswog::RosswogOverrides),
+    /// The special-relativistic forms of F1–F4 (Rosswog (2015) Sec. 6), see [`rosswog::sr`].
+    #[serde(rename = "rosswog-sr-f1")]
+    RosswogSrF1(rosswog::RosswogOverrides),
+    #[serde(rename = "rosswog-sr-f2")]
+    RosswogSrF2(rosswog::RosswogOverrides),
+    #[serde(rename = "rosswog-sr-f3")]
+    RosswogSrF3(rosswog::RosswogOverrides),
+    #[serde(rename = "rosswog-sr-f4")]
+    RosswogSrF4(rosswog::RosswogOverrides),
     /// CRKSPH (Frontiere, Raskin & Owen 2017), see [`crksph`].
     Crksph(crksph::CrksphParams),
     /// Compatible SPH (the CRKSPH paper's App E), see [`compsph`].
@@ -124,6 +137,9 @@ impl SchemeConfig {
             SchemeConfig::Compsph(p) | SchemeConfig::CompsphCullen(p) => p.validate(),
             SchemeConfig::Psph(p) => p.validate(),
             _ => {
+                if let Some((preset, o)) = self.rosswog_sr() {
+                    return rosswog::sr::validate_overrides(preset, &o);
+                }
                 let (preset, o) = self.rosswog().expect("rosswog variant");
                 o.validate(preset)
             }
@@ -138,6 +154,9 @@ impl SchemeConfig {
             SchemeConfig::CompsphCullen(p) => Box::new(compsph::Compsph::<D>::new(p, true)),
             SchemeConfig::Psph(p) => Box::new(psph::Psph::new(p)),
             _ => {
+                if let Some((preset, o)) = self.rosswog_sr() {
+                    return Box::new(rosswog::sr::RosswogSr::new(preset, o.resolve(preset)));
+                }
                 let (preset, o) = self.rosswog().expect("rosswog variant");
                 Box::new(rosswog::Rosswog::new(preset, o.resolve(preset)))
             }
@@ -207,6 +226,23 @@ impl SchemeConfig {
         }
     }
 
+    /// One of the special-relativistic presets `rosswog-sr-f1` … `rosswog-sr-f4`.
+    pub fn rosswog_sr(&self) -> Option<(rosswog::Preset, rosswog::RosswogOverrides)> {
+        use rosswog::Preset;
+        match *self {
+            SchemeConfig::RosswogSrF1(o) => Some((Preset::F1, o)),
+            SchemeConfig::RosswogSrF2(o) => Some((Preset::F2, o)),
+            SchemeConfig::RosswogSrF3(o) => Some((Preset::F3, o)),
+            SchemeConfig::RosswogSrF4(o) => Some((Preset::F4, o)),
+            _ => None,
+        }
+    }
+
+    /// Whether the scheme is special-relativistic (c = 1; a CLI capability only).
+    pub fn relativistic(&self) -> bool {
+        self.rosswog_sr().is_some()
+    }
+
     /// Kernel and η a scheme runs with when the case has no `[kernel]` table.
     pub fn preferred_kernel(&self) -> (crate::kernel::KernelName, Option<f64>) {
         use crate::kernel::KernelName;
@@ -229,7 +265,7 @@ impl SchemeConfig {
             SchemeConfig::Rpsph(_) => return (KernelName::CubicSpline, Some(1.545)),
             _ => {}
         }
-        match self.rosswog() {
+        match self.rosswog().or(self.rosswog_sr()) {
             Some((preset, _)) => {
                 let (k, eta) = preset.kernel();
                 (k, Some(eta))
@@ -244,7 +280,7 @@ impl SchemeConfig {
         if self.crksph_paper() {
             return (crate::integrate::IntegratorKind::CrkRk2, 0.25);
         }
-        match self.rosswog() {
+        match self.rosswog().or(self.rosswog_sr()) {
             // Rosswog (2015) Sec. 6.5: SSP-RK3 with C = 0.5.
             Some(_) => (crate::integrate::IntegratorKind::SspRk3, 0.5),
             None => (crate::integrate::IntegratorKind::Leapfrog, 0.3),

@@ -15,6 +15,7 @@
 //! exact. Angular momentum is not exact with IA (G_a is not along r_ab; Rosswog (2015) Eqs. 16–25).
 
 pub mod gradients;
+pub mod sr;
 pub mod triggers;
 
 use super::smoothing::solve_density_and_h_weighted;
@@ -235,71 +236,87 @@ impl Rosswog {
         }
     }
 
-    /// X for the current pressures (X = P^k with P floored at a tiny positive value).
-    ///
-    /// Our decision for liquids (the paper's X = P^k, its Eq. 12 family, is written for
-    /// ideal gases): X = (P + P_off)^k with the EOS's offset (`EosConfig::pressure_offset`,
-    /// B for Tait, γP∞ for a stiffened gas), the part of P that behaves like a gas pressure.
-    /// A liquid's P passes through zero at a free surface and sits near it in a tank, where
-    /// P^k would swing by orders of magnitude and the ρ–P loop run away (measured: the closed
-    /// tank's first evaluation diverged to P ~ 1e109); (P + P_off)^k = B^k (ρ/ρ0)^{γk} stays
-    /// smooth. For ideal gases P_off = 0: the paper's X unchanged.
-    fn weights<const D: usize>(&self, sys: &System<D>) -> Option<Vec<f64>> {
-        let p = &sys.particles;
-        match self.params.volume {
-            VolumeElement::Mass => None,
-            VolumeElement::One => Some(vec![1.0; p.len()]),
-            VolumeElement::Pressure => {
-                let k = self.params.k;
-                let off = sys.eos.pressure_offset();
-                Some(
-                    p.pressure
-                        .par_iter()
-                        .map(|&pr| (pr + off).max(1e-300).powf(k))
-                        .collect(),
-                )
-            }
-        }
-    }
-
-    /// Density, h and pressure; for X = P^k the ρ–P loop of Rosswog (2015) Sec. 6.1.3 (steps a–e): one more
-    /// density pass with the X of the new pressures. Our decision for bodies: in the first
-    /// step the wall particles' X starts from the pressure they were generated with (not yet
-    /// the wall condition's), so the loop repeats until X settles (max relative change
-    /// ≤ 1e-10, at most `FIRST_STEP_PASSES`); afterwards X carries over and two passes suffice.
+    /// Density, h and pressure (Newtonian: P from the EOS), see [`density_and_pressure`].
     fn density<const D: usize>(&self, sys: &mut System<D>) -> Vec<f64> {
-        const FIRST_STEP_PASSES: usize = 30;
-        let x = self.weights(sys);
-        let again = self.params.volume == VolumeElement::Pressure;
-        // the wall condition reads the working list, so with bodies every pass compacts it
-        let walls = !sys.bodies.is_empty();
-        solve_density_and_h_weighted(sys, x.as_deref(), !again || walls);
-        sys.update_eos();
-        if !again {
-            return x.unwrap_or_else(|| sys.particles.mass.clone());
-        }
-        let passes = if self.first_step && walls {
-            FIRST_STEP_PASSES
-        } else {
-            1
-        };
-        let mut prev = x.expect("X = P^k");
-        for _ in 0..passes {
-            let x = self.weights(sys).expect("X = P^k");
-            solve_density_and_h_weighted(sys, Some(&x), true);
-            sys.update_eos();
-            let change = x
-                .iter()
-                .zip(&prev)
-                .map(|(a, b)| ((a - b) / a).abs())
-                .fold(0.0, f64::max);
-            prev = x;
-            if change <= 1e-10 {
-                break;
-            }
-        }
-        prev
+        density_and_pressure(sys, &self.params, self.first_step, &mut |s| {
+            s.update_eos();
+            Ok(())
+        })
+        .expect("the Newtonian EOS update cannot fail")
     }
+}
+
+/// X for the current pressures (X = P^k with P floored at a tiny positive value).
+///
+/// Our decision for liquids (the paper's X = P^k, its Eq. 12 family, is written for
+/// ideal gases): X = (P + P_off)^k with the EOS's offset (`EosConfig::pressure_offset`,
+/// B for Tait, γP∞ for a stiffened gas), the part of P that behaves like a gas pressure.
+/// A liquid's P passes through zero at a free surface and sits near it in a tank, where
+/// P^k would swing by orders of magnitude and the ρ–P loop run away (measured: the closed
+/// tank's first evaluation diverged to P ~ 1e109); (P + P_off)^k = B^k (ρ/ρ0)^{γk} stays
+/// smooth. For ideal gases P_off = 0: the paper's X unchanged.
+fn weights<const D: usize>(sys: &System<D>, params: &RosswogParams) -> Option<Vec<f64>> {
+    let p = &sys.particles;
+    match params.volume {
+        VolumeElement::Mass => None,
+        VolumeElement::One => Some(vec![1.0; p.len()]),
+        VolumeElement::Pressure => {
+            let k = params.k;
+            let off = sys.eos.pressure_offset();
+            Some(
+                p.pressure
+                    .par_iter()
+                    .map(|&pr| (pr + off).max(1e-300).powf(k))
+                    .collect(),
+            )
+        }
+    }
+}
+
+/// Density, h and pressure; for X = P^k the ρ–P loop of Rosswog (2015) Sec. 6.1.3 (steps
+/// a–e): one more density pass with the X of the new pressures. `pressures` turns the new
+/// densities into pressures: the EOS (Newtonian) or the primitive recovery (SR, Sec. 6.4).
+/// Our decision for bodies: in the first step the wall particles' X starts from the pressure
+/// they were generated with (not yet the wall condition's), so the loop repeats until X
+/// settles (max relative change ≤ 1e-10, at most `FIRST_STEP_PASSES`); afterwards X carries
+/// over and two passes suffice. Returns X (the masses for X = m).
+pub(crate) fn density_and_pressure<const D: usize>(
+    sys: &mut System<D>,
+    params: &RosswogParams,
+    first_step: bool,
+    pressures: &mut dyn FnMut(&mut System<D>) -> Result<(), SchemeError>,
+) -> Result<Vec<f64>, SchemeError> {
+    const FIRST_STEP_PASSES: usize = 30;
+    let x = weights(sys, params);
+    let again = params.volume == VolumeElement::Pressure;
+    // the wall condition reads the working list, so with bodies every pass compacts it
+    let walls = !sys.bodies.is_empty();
+    solve_density_and_h_weighted(sys, x.as_deref(), !again || walls);
+    pressures(sys)?;
+    if !again {
+        return Ok(x.unwrap_or_else(|| sys.particles.mass.clone()));
+    }
+    let passes = if first_step && walls {
+        FIRST_STEP_PASSES
+    } else {
+        1
+    };
+    let mut prev = x.expect("X = P^k");
+    for _ in 0..passes {
+        let x = weights(sys, params).expect("X = P^k");
+        solve_density_and_h_weighted(sys, Some(&x), true);
+        pressures(sys)?;
+        let change = x
+            .iter()
+            .zip(&prev)
+            .map(|(a, b)| ((a - b) / a).abs())
+            .fold(0.0, f64::max);
+        prev = x;
+        if change <= 1e-10 {
+            break;
+        }
+    }
+    Ok(prev)
 }
 
 /// Particle a's internal-energy change per unit m_b from the Chow–Monaghan dissipation of
@@ -327,6 +344,32 @@ fn dissipative_heating<const D: usize>(
     dab: &Vector<D>,
 ) -> f64 {
     kv * du_ab * e.dot(dab) + 0.5 * pi * vab.dot(dab)
+}
+
+/// g_a (or g_b) of the pair (a, b), standing in for ∇_a W (Eqs. 66/67) with particle i's
+/// smoothing length h: IA, C_i (r_b − r_a) W(h), or, on fallback and in the kernel
+/// formulations, dW/dr · r̂_ab. `dx` = r_a − r_b; a mirror image (`code` ≠ 0) carries the
+/// reflected matrix R C R.
+#[inline(always)]
+pub(crate) fn pair_gradient<const D: usize>(
+    k: &crate::kernel::DimKernel<D>,
+    ia: bool,
+    mat: &gradients::IaMatrix<D>,
+    h: f64,
+    dx: &Vector<D>,
+    dist: f64,
+    code: u8,
+) -> Vector<D> {
+    if ia && !mat.fallback {
+        let c = if code == 0 {
+            mat.c
+        } else {
+            gradients::reflect(&mat.c, code)
+        };
+        c * (-dx) * k.w(dist, h)
+    } else {
+        *dx * (k.dwdr(dist, h) / dist)
+    }
 }
 
 /// What the pair loop reads of one particle.
@@ -424,20 +467,8 @@ impl<const D: usize> Scheme<D> for Rosswog {
             .collect();
         let mut out = vec![Acc::<D>::default(); n];
         let k = &sys.kernel;
-        // g_a and g_b of the pair (a, b), both standing in for ∇_a W (Eqs. 66/67): per particle
-        // either IA (C (r_b − r_a) W) or, on fallback / kernel formulations, dW/dr · r̂_ab.
         let grad = |i: usize, r: &Rec<D>, dx: &Vector<D>, dist: f64, code: u8| -> Vector<D> {
-            if ia && !mats[i].fallback {
-                // A mirror image carries the reflected matrix R C R.
-                let c = if code == 0 {
-                    mats[i].c
-                } else {
-                    gradients::reflect(&mats[i].c, code)
-                };
-                c * (-dx) * k.w(dist, r.h)
-            } else {
-                *dx * (k.dwdr(dist, r.h) / dist)
-            }
+            pair_gradient(k, ia, &mats[i], r.h, dx, dist, code)
         };
         sys.gather_with(
             |i| (recs[i].x, recs[i].v),
@@ -505,6 +536,7 @@ impl<const D: usize> Scheme<D> for Rosswog {
                 self.prev_div_slot,
                 dt,
                 self.first_step,
+                None,
             ));
         }
         self.first_step = false;

@@ -22,14 +22,16 @@ struct NoiseSums {
 }
 
 impl NoiseSums {
-    fn add(&mut self, d: f64) {
+    /// A neighbour's ∇·v `d` and its Lorentz factor `g` (1 in Newtonian runs): noise 1 sums
+    /// ∇·v (Eqs. 87–88), noise 2 sums γ_b ∇·v_b (Eqs. 90–91).
+    fn add(&mut self, d: f64, g: f64) {
         self.s1 += d;
         self.s2 += d.abs();
         if d > 0.0 {
-            self.pos_sum += d;
+            self.pos_sum += g * d;
             self.pos_n += 1;
         } else if d < 0.0 {
-            self.neg_sum += d;
+            self.neg_sum += g * d;
             self.neg_n += 1;
         }
     }
@@ -41,7 +43,9 @@ pub fn update<const D: usize>(
     prev_slot: usize,
     dt: f64,
     first: bool,
+    lorentz: Option<&[f64]>,
 ) -> TriggerLevels {
+    let gamma = |i: usize| lorentz.map_or(1.0, |l| l[i]);
     let n = sys.particles.len();
     let mut sums = vec![NoiseSums::default(); n];
     {
@@ -49,7 +53,7 @@ pub fn update<const D: usize>(
         let k = &sys.kernel;
         sys.gather(&mut sums, |a, s, pr| {
             if pr.r < k.radius(p.h[a]) {
-                s.add(p.div_v[pr.b]);
+                s.add(p.div_v[pr.b], gamma(pr.b));
             }
         });
     }
@@ -60,7 +64,7 @@ pub fn update<const D: usize>(
         .into_par_iter()
         .map(|a| {
             let mut s = sums[a];
-            s.add(div[a]); // (a) self included
+            s.add(div[a], gamma(a)); // (a) self included
             let c_over_h = cs[a] / h[a];
             // shock (Eqs. 85–86)
             let ddiv = if first || dt <= 0.0 {

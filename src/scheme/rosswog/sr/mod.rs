@@ -1,0 +1,396 @@
+//! Special-relativistic SPH of Rosswog (2015) Sec. 6 (c = 1, energies per baryon in units of
+//! m0 c²): the formulations F1–F4 with the same gradient, kernel and volume-element choices
+//! as the Newtonian presets ([`super::Preset`]), evolving the canonical momentum per baryon
+//! S = γ E v (Eq. 54) and the canonical energy per baryon ε = γ E − P/N (Eq. 57).
+//!
+//! Where the Newtonian machinery has the same form it is reused, not copied: the density
+//! N = γ n is the X-weighted kernel sum of baryon numbers ν (Eqs. 36–41, [`super::density_and_pressure`]
+//! with the primitive recovery in place of the EOS), the IA matrices and fIA ∇·v
+//! ([`super::gradients`]), the pair gradients g_a, g_b ([`super::pair_gradient`]) and the
+//! dissipation triggers ([`super::triggers`], with the γ_b weights of Eqs. 90/91).
+//!
+//! What is SR only: the momentum and energy equations 55/61 (kernel gradients) and 64/65
+//! (IA); the primitive recovery (Eqs. 97–99, [`recovery`]); the sound speed (Eq. 63); the
+//! eigenvalue signal speeds (Eq. 79); and the dissipation on S and ε with the γ* projections
+//! (Eqs. 68–76). The particles keep ν in `mass`, N in `rho`, the recovered v, u, P and c_s in
+//! `vel`, `u`, `pressure` and `sound_speed`, and S, ε, γ in slots ([`SrSlots`]) the
+//! integrator advances in place of v and u (`acc` holds dS/dt, `dudt` dε/dt).
+//!
+//! Case files give rest-frame states (n, P, v), as the paper quotes them. [`RosswogSr::init`]
+//! turns them into ν = γ m and N = γ n, so a region's lattice keeps its spacing and its
+//! summed density is the computing-frame N (Eq. 46).
+
+pub mod recovery;
+
+use super::triggers;
+use super::{
+    density_and_pressure, gradients, pair_gradient, GradientOperator, Preset, RosswogOverrides,
+    RosswogParams, SignalVelocity, TriggerLevels, APPROACH_TOLERANCE,
+};
+use crate::particles::Vector;
+use crate::scheme::{Scheme, SchemeError};
+use crate::system::System;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Where the particles keep the SR state the integrator evolves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SrSlots {
+    /// `extra_vectors` slot of the canonical momentum per baryon S.
+    pub momentum: usize,
+    /// `extra_scalars` slot of the canonical energy per baryon ε.
+    pub energy: usize,
+    /// `extra_scalars` slot of the Lorentz factor γ of the latest recovery.
+    pub lorentz: usize,
+}
+
+/// The override keys of an SR preset: those of the Newtonian presets, except the signal
+/// velocity, which is the relativistic eigenvalue bound of Eq. 79 (Lorentz-, not
+/// Galilean-, invariant physics).
+pub fn validate_overrides(preset: Preset, o: &RosswogOverrides) -> Result<(), String> {
+    if o.signal_velocity.is_some() {
+        return Err("scheme.signal_velocity: the rosswog-sr presets take their signal speed from the relativistic eigenvalues (Rosswog (2015) Eq. 79); remove the key".into());
+    }
+    o.validate(preset)
+}
+
+pub struct RosswogSr {
+    pub params: RosswogParams,
+    preset: Preset,
+    prev_div_slot: usize,
+    first_step: bool,
+    levels: Option<TriggerLevels>,
+    slots: SrSlots,
+    /// Γ of P = (Γ − 1) n u (Eq. 62).
+    gamma_eos: f64,
+    /// A particle whose initial state has no SR counterpart (|v| ≥ 1 from a `[[field]]`,
+    /// which the case validation cannot see), reported by the first evaluation.
+    bad_state: Option<String>,
+}
+
+impl RosswogSr {
+    pub fn new(preset: Preset, params: RosswogParams) -> Self {
+        Self {
+            params: RosswogParams {
+                signal_velocity: SignalVelocity::Literal,
+                ..params
+            },
+            preset,
+            prev_div_slot: usize::MAX,
+            first_step: true,
+            levels: None,
+            slots: SrSlots {
+                momentum: usize::MAX,
+                energy: usize::MAX,
+                lorentz: usize::MAX,
+            },
+            gamma_eos: 5.0 / 3.0,
+            bad_state: None,
+        }
+    }
+}
+
+/// v, u, P, c_s and γ of every particle from its S, ε and the summed N (Rosswog (2015)
+/// Sec. 6.4), with the iteration counts in the run statistics. A state with no velocity
+/// below c stops the run with the particle named, never a NaN.
+pub fn recover_all<const D: usize>(
+    sys: &mut System<D>,
+    slots: SrSlots,
+    gamma_eos: f64,
+) -> Result<(), SchemeError> {
+    let p = &sys.particles;
+    let s = &p.extra_vectors[slots.momentum];
+    let eps = &p.extra_scalars[slots.energy];
+    let out: Vec<Result<recovery::Recovered, String>> = (0..p.len())
+        .into_par_iter()
+        .map(|i| {
+            recovery::recover(gamma_eos, s[i].norm(), eps[i], p.rho[i]).map_err(|e| {
+                format!(
+                    "primitive recovery failed on particle {} at x = {:?}: {}",
+                    p.id[i],
+                    p.pos[i].as_slice(),
+                    e.0
+                )
+            })
+        })
+        .collect();
+    let mut iterations = 0u64;
+    let mut max_it = 0u64;
+    let mut fallbacks = 0u64;
+    for r in &out {
+        match r {
+            Ok(r) => {
+                iterations += r.iterations as u64;
+                max_it = max_it.max(r.iterations as u64);
+                fallbacks += r.floored as u64;
+            }
+            Err(e) => return Err(SchemeError(e.clone())),
+        }
+    }
+    let st = &mut sys.stats;
+    st.sr_recoveries += out.len() as u64;
+    st.sr_recovery_iterations += iterations;
+    st.sr_recovery_max_iterations = st.sr_recovery_max_iterations.max(max_it);
+    st.sr_recovery_fallbacks += fallbacks;
+    let p = &mut sys.particles;
+    let s = std::mem::take(&mut p.extra_vectors[slots.momentum]);
+    let mut lorentz = std::mem::take(&mut p.extra_scalars[slots.lorentz]);
+    p.vel
+        .par_iter_mut()
+        .zip(p.u.par_iter_mut())
+        .zip(p.pressure.par_iter_mut().zip(p.sound_speed.par_iter_mut()))
+        .zip(lorentz.par_iter_mut())
+        .enumerate()
+        .for_each(|(i, (((v, u), (pr, cs)), g))| {
+            let q = out[i].as_ref().expect("checked above").prim;
+            *v = s[i] * q.v_over_s;
+            *u = q.u;
+            *pr = q.p;
+            *cs = recovery::sound_speed(gamma_eos, q.enthalpy());
+            *g = q.lorentz;
+        });
+    p.extra_vectors[slots.momentum] = s;
+    p.extra_scalars[slots.lorentz] = lorentz;
+    Ok(())
+}
+
+/// What the SR pair loop reads of one particle.
+#[derive(Clone, Copy)]
+struct Rec<const D: usize> {
+    x: Vector<D>,
+    v: Vector<D>,
+    nu: f64,
+    h: f64,
+    /// X_a
+    xw: f64,
+    /// A_a = P_a V_a² / (Ω_a X_a)
+    a: f64,
+    /// N_a
+    big_n: f64,
+    c: f64,
+    /// E_a = 1 + u + P/n (Eq. 59)
+    enthalpy: f64,
+    /// P_a / N_a
+    p_over_n: f64,
+    k: f64,
+}
+
+#[derive(Clone, Copy)]
+struct Acc<const D: usize> {
+    ds: Vector<D>,
+    deps: f64,
+    ds_diss: Vector<D>,
+    deps_diss: f64,
+    vsig: f64,
+}
+
+impl<const D: usize> Default for Acc<D> {
+    fn default() -> Self {
+        Self {
+            ds: Vector::zeros(),
+            deps: 0.0,
+            ds_diss: Vector::zeros(),
+            deps_diss: 0.0,
+            vsig: 0.0,
+        }
+    }
+}
+
+/// γ*_k E_k and ε*_k of Eqs. 73–75 for particle k with velocity `v` along the pair axis ê:
+/// S*_k·ê = γ*_k E_k (v·ê), ε*_k = γ*_k E_k − P_k/N_k.
+#[inline(always)]
+fn projected(v_par: f64, enthalpy: f64, p_over_n: f64) -> (f64, f64) {
+    let gs = 1.0 / (1.0 - v_par * v_par).sqrt();
+    (gs * enthalpy * v_par, gs * enthalpy - p_over_n)
+}
+
+impl<const D: usize> Scheme<D> for RosswogSr {
+    fn name(&self) -> &'static str {
+        match self.preset {
+            Preset::F1 => "rosswog-sr-f1",
+            Preset::F2 => "rosswog-sr-f2",
+            Preset::F3 => "rosswog-sr-f3",
+            Preset::F4 => "rosswog-sr-f4",
+        }
+    }
+
+    /// Register S, ε and γ, and turn the case's rest-frame states (n in `rho`, u from P,
+    /// v) into the computing frame: γ = 1/√(1 − v²), ν = γ m, N = γ n, S = γ E v,
+    /// ε = γ E − P/N (Eqs. 46, 54, 57). The case validation has checked |v| < 1 and the
+    /// ideal-gas EOS.
+    fn init(&mut self, sys: &mut System<D>) {
+        sys.wall_pairs = true;
+        if let crate::eos::EosConfig::IdealGas { gamma } = sys.eos {
+            self.gamma_eos = gamma;
+        }
+        let g = self.gamma_eos;
+        self.prev_div_slot = sys.particles.add_scalar_field(0.0);
+        let slots = SrSlots {
+            momentum: sys.particles.add_vector_field(),
+            energy: sys.particles.add_scalar_field(0.0),
+            lorentz: sys.particles.add_scalar_field(1.0),
+        };
+        self.slots = slots;
+        sys.relativistic = Some(slots);
+        let p = &mut sys.particles;
+        for i in 0..p.len() {
+            let v = p.vel[i];
+            let (n, u) = (p.rho[i], p.u[i]);
+            let lorentz = 1.0 / (1.0 - v.norm_squared()).sqrt();
+            if !(lorentz.is_finite() && n > 0.0 && u > 0.0) && self.bad_state.is_none() {
+                self.bad_state = Some(format!(
+                    "particle {} at x = {:?}: the initial state needs |v| < 1 (c = 1), n > 0 and P > 0, got |v| = {}, n = {n}, u = {u}",
+                    p.id[i],
+                    p.pos[i].as_slice(),
+                    v.norm()
+                ));
+            }
+            let pr = (g - 1.0) * n * u;
+            let e = 1.0 + u + pr / n;
+            p.mass[i] *= lorentz;
+            p.rho[i] = lorentz * n;
+            p.pressure[i] = pr;
+            p.sound_speed[i] = recovery::sound_speed(g, e);
+            p.extra_vectors[slots.momentum][i] = v * (lorentz * e);
+            p.extra_scalars[slots.energy][i] = lorentz * e - pr / (lorentz * n);
+            p.extra_scalars[slots.lorentz][i] = lorentz;
+        }
+        let k0 = if self.params.triggers && self.params.k_constant_until <= 0.0 {
+            self.params.k_min
+        } else {
+            self.params.k_constant
+        };
+        p.alpha.iter_mut().for_each(|a| *a = k0);
+    }
+
+    fn evaluate(&mut self, sys: &mut System<D>) -> Result<(), SchemeError> {
+        if let Some(e) = &self.bad_state {
+            return Err(SchemeError(e.clone()));
+        }
+        let (slots, g) = (self.slots, self.gamma_eos);
+        let xw = density_and_pressure(sys, &self.params, self.first_step, &mut |s| {
+            recover_all(s, slots, g)
+        })?;
+        let t0 = std::time::Instant::now();
+        let (mats, _grads, fallbacks) = gradients::ia_pass(sys);
+        sys.stats.ia_fallbacks = fallbacks;
+        sys.stats.ia_fallbacks_total += fallbacks;
+        sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
+        let t0 = std::time::Instant::now();
+        let n = sys.particles.len();
+        let ia = self.params.gradient == GradientOperator::IntegralApproximation;
+        let p = &sys.particles;
+        let recs: Vec<Rec<D>> = (0..n)
+            .into_par_iter()
+            .map(|a| {
+                let vol = p.mass[a] / p.rho[a];
+                let om = if ia { 1.0 } else { p.omega[a] };
+                let lorentz = p.extra_scalars[slots.lorentz][a];
+                let rest_n = p.rho[a] / lorentz;
+                Rec {
+                    x: p.pos[a],
+                    v: p.vel[a],
+                    nu: p.mass[a],
+                    h: p.h[a],
+                    xw: xw[a],
+                    a: p.pressure[a] * vol * vol / (om * xw[a]),
+                    big_n: p.rho[a],
+                    c: p.sound_speed[a],
+                    enthalpy: 1.0 + p.u[a] + p.pressure[a] / rest_n,
+                    p_over_n: p.pressure[a] / p.rho[a],
+                    k: p.alpha[a],
+                }
+            })
+            .collect();
+        let mut out = vec![Acc::<D>::default(); n];
+        let k = &sys.kernel;
+        sys.gather_with(
+            |i| (recs[i].x, recs[i].v),
+            &mut out,
+            |a, o, pr| {
+                if pr.r <= 0.0 || sys.wall_pair(a, pr.b) {
+                    return;
+                }
+                let (ra, rb) = (&recs[a], &recs[pr.b]);
+                let ga = pair_gradient(k, ia, &mats[a], ra.h, &pr.dx, pr.r, 0);
+                let gb = pair_gradient(k, ia, &mats[pr.b], rb.h, &pr.dx, pr.r, pr.code);
+                // Eqs. 55/64 and 61/65 without the 1/ν_a factor; b's image velocity
+                o.ds -= ga * (ra.a * rb.xw) + gb * (rb.a * ra.xw);
+                o.deps -= ra.a * rb.xw * pr.vb.dot(&ga) + rb.a * ra.xw * ra.v.dot(&gb);
+                let e = pr.dx / pr.r;
+                let (va_par, vb_par) = (ra.v.dot(&e), pr.vb.dot(&e));
+                // Eqs. 77–79
+                let vsig = recovery::signal_speed(va_par, ra.v.norm_squared(), ra.c).max(
+                    recovery::signal_speed(vb_par, pr.vb.norm_squared(), rb.c),
+                );
+                o.vsig = o.vsig.max(vsig);
+                let w = va_par - vb_par;
+                // approaching (v_ab·r_ab < 0) beyond round-off, as in the Newtonian loop
+                if w < -APPROACH_TOLERANCE * ra.c.max(rb.c) {
+                    // Eqs. 68–76 with D_ab = ½(g_a + g_b) (Eq. 72 or 76) and N̄_ab the
+                    // arithmetic mean (the paper leaves it undefined)
+                    let dab = (ga + gb) * 0.5;
+                    let kab = 0.5 * (ra.k + rb.k);
+                    let kv = kab * vsig / (0.5 * (ra.big_n + rb.big_n));
+                    let (sa, ea) = projected(va_par, ra.enthalpy, ra.p_over_n);
+                    let (sb, eb) = projected(vb_par, rb.enthalpy, rb.p_over_n);
+                    let pi = -kv * (sa - sb);
+                    o.ds_diss -= dab * (rb.nu * pi);
+                    // −ν_b Ω_ab·D_ab with Ω_ab = −kv (ε*_a − ε*_b) ê (Eq. 71). Unlike the
+                    // Newtonian loop, which splits the viscous heating pairwise, this is the
+                    // paper's e-form: ε must be evolved for the recovery.
+                    o.deps_diss += rb.nu * kv * (ea - eb) * e.dot(&dab);
+                }
+            },
+        );
+        sys.store_derivatives(t0, |a| {
+            let (o, nu) = (&out[a], recs[a].nu);
+            (o.ds / nu + o.ds_diss, o.deps / nu + o.deps_diss, o.vsig)
+        });
+        Ok(())
+    }
+
+    fn refresh(&mut self, sys: &mut System<D>) {
+        let (slots, g) = (self.slots, self.gamma_eos);
+        // a refresh has no way to report; the next evaluation recovers again and reports
+        let _ = density_and_pressure(sys, &self.params, self.first_step, &mut |s| {
+            recover_all(s, slots, g)
+        });
+    }
+
+    fn end_step(&mut self, sys: &mut System<D>, dt: f64) {
+        if self.params.triggers {
+            let lorentz = sys.particles.extra_scalars[self.slots.lorentz].clone();
+            self.levels = Some(triggers::update(
+                sys,
+                &self.params,
+                self.prev_div_slot,
+                dt,
+                self.first_step,
+                Some(&lorentz),
+            ));
+        }
+        self.first_step = false;
+    }
+
+    fn trigger_levels(&self) -> Option<TriggerLevels> {
+        self.levels
+    }
+
+    fn carried_state(&self) -> Vec<f64> {
+        vec![if self.first_step { 1.0 } else { 0.0 }]
+    }
+
+    fn set_carried_state(&mut self, state: &[f64]) -> Result<(), String> {
+        match state {
+            [f] if *f == 0.0 || *f == 1.0 => {
+                self.first_step = *f == 1.0;
+                Ok(())
+            }
+            _ => Err(format!(
+                "{}: expected one 0/1 flag, got {state:?}",
+                <Self as Scheme<D>>::name(self)
+            )),
+        }
+    }
+}
