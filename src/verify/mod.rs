@@ -4,6 +4,7 @@ pub mod lattice;
 pub mod radial;
 pub mod riemann;
 pub mod sedov;
+pub mod sr_riemann;
 pub mod vortex;
 
 use riemann::{ExactRiemann, Primitive};
