@@ -10,6 +10,7 @@ use crate::verify::radial::{radial_errors, RadialExact};
 use crate::verify::riemann::{ExactRiemann, Primitive};
 use crate::verify::sedov::Sedov;
 use crate::verify::shock_tube_errors;
+use crate::verify::sr_riemann::{SrPrimitive, SrRiemann};
 use std::path::Path;
 
 pub(super) fn verify<const D: usize>(
@@ -213,20 +214,35 @@ fn verify_riemann<const D: usize>(
     summary: &mut RunSummary,
 ) -> Result<(), RunError> {
     let gamma = crate::eos::Eos::gamma(&case.eos);
-    let rs = ExactRiemann::new(
-        Primitive {
-            rho: v.left[0],
-            u: v.left[1],
-            p: v.left[2],
-        },
-        Primitive {
-            rho: v.right[0],
-            u: v.right[1],
-            p: v.right[2],
-        },
-        gamma,
-    )
-    .map_err(|e| RunError::Case(CaseError(format!("verify: {e}"))))?;
+    let state = |s: [f64; 3]| Primitive {
+        rho: s[0],
+        u: s[1],
+        p: s[2],
+    };
+    let bad = |e: String| RunError::Case(CaseError(format!("verify: {e}")));
+    // SR runs give rest-frame [n, v, P] and compare the computing-frame N = γ n that the
+    // particles carry (Rosswog (2015) Eq. 46)
+    let solution: Box<dyn Fn(f64) -> (f64, f64, f64) + Sync> = if case.scheme.relativistic() {
+        let sr = |s: [f64; 3]| SrPrimitive {
+            n: s[0],
+            vx: s[1],
+            vt: 0.0,
+            p: s[2],
+        };
+        let rs = SrRiemann::new(sr(v.left), sr(v.right), gamma).map_err(bad)?;
+        let (x0, t) = (v.x0, sim.time);
+        Box::new(move |x| {
+            let s = rs.at(x, x0, t);
+            (s.lorentz() * s.n, s.vx, s.p)
+        })
+    } else {
+        let rs = ExactRiemann::new(state(v.left), state(v.right), gamma).map_err(bad)?;
+        let (x0, t) = (v.x0, sim.time);
+        Box::new(move |x| {
+            let s = rs.at(x, x0, t);
+            (s.rho, s.u, s.p)
+        })
+    };
     let p = &sim.sys.particles;
     let samples: Vec<(f64, f64, f64, f64)> = (0..p.len())
         .map(|i| (p.pos[i][0], p.rho[i], p.vel[i][0], p.pressure[i]))
@@ -235,30 +251,30 @@ fn verify_riemann<const D: usize>(
         v.x_min.unwrap_or(f64::NEG_INFINITY),
         v.x_max.unwrap_or(f64::INFINITY),
     );
-    let errs = shock_tube_errors(&rs, v.x0, sim.time, &samples, lo, hi);
+    let errs = shock_tube_errors(&*solution, &samples, lo, hi);
     summary.shock_tube = Some(errs);
     let (x0, x1) = (case.domain.min[0], case.domain.max[0]);
-    let exact = |f: fn(&Primitive) -> f64| -> Vec<(f64, f64)> {
+    let exact = |f: fn(&(f64, f64, f64)) -> f64| -> Vec<(f64, f64)> {
         (0..=2000)
             .map(|i| {
                 let x = x0 + (x1 - x0) * i as f64 / 2000.0;
-                (x, f(&rs.at(x, v.x0, sim.time)))
+                (x, f(&solution(x)))
             })
             .collect()
     };
-    let (er, eu, ep) = (exact(|s| s.rho), exact(|s| s.u), exact(|s| s.p));
+    let (er, eu, ep) = (exact(|s| s.0), exact(|s| s.1), exact(|s| s.2));
+    // u = P/((Γ − 1) n) with the rest-frame n = N/γ in SR runs
+    let relativistic = case.scheme.relativistic();
     let ee: Vec<(f64, f64)> = er
         .iter()
-        .zip(ep.iter())
-        .map(|(&(x, r), &(_, pp))| {
-            (
-                x,
-                if r > 0.0 {
-                    pp / ((gamma - 1.0) * r)
-                } else {
-                    0.0
-                },
-            )
+        .zip(ep.iter().zip(&eu))
+        .map(|(&(x, r), (&(_, pp), &(_, vx)))| {
+            let n = if relativistic {
+                r * (1.0 - vx * vx).sqrt()
+            } else {
+                r
+            };
+            (x, if n > 0.0 { pp / ((gamma - 1.0) * n) } else { 0.0 })
         })
         .collect();
     let caption = format!(
