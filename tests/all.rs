@@ -29,6 +29,7 @@ mod rosswog;
 mod rosswog_static;
 mod rpsph;
 mod sod;
+mod sr;
 mod suite_small;
 mod viscosity;
 mod wall_schemes;

@@ -227,6 +227,34 @@ fn lattice_points<const D: usize>(
     (pts, vol)
 }
 
+/// A 2D lattice of spacing `a` turned by `degrees` about the centre of [lo, hi]: laid over the
+/// square that holds the box in every orientation, turned, and cut to the box.
+fn turned_lattice_points<const D: usize>(
+    lattice: Lattice,
+    lo: &[f64],
+    hi: &[f64],
+    a: f64,
+    degrees: f64,
+) -> (Vec<Vector<D>>, f64) {
+    let c = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
+    let half = 0.5 * (hi[0] - lo[0]).hypot(hi[1] - lo[1]) + a;
+    let (big_lo, big_hi) = ([c[0] - half, c[1] - half], [c[0] + half, c[1] + half]);
+    let (pts, vol) = lattice_points::<D>(lattice, &big_lo, &big_hi, a);
+    let (sin, cos) = degrees.to_radians().sin_cos();
+    let turned = pts
+        .into_iter()
+        .map(|p| {
+            let (dx, dy) = (p[0] - c[0], p[1] - c[1]);
+            let mut q = p;
+            q[0] = c[0] + cos * dx - sin * dy;
+            q[1] = c[1] + sin * dx + cos * dy;
+            q
+        })
+        .filter(|q| (0..2).all(|k| q[k] >= lo[k] && q[k] < hi[k]))
+        .collect();
+    (turned, vol)
+}
+
 /// The kernel-sum density of an ideal lattice over the density its volume per particle V
 /// implies, 1 + ε = V Σ_b W(r_ab, h), at the h where the summation density's h–ρ relation
 /// settles: h = η (m/ρ)^{1/D} with ρ = m Σ_b W(r_ab, h).
@@ -449,7 +477,10 @@ pub fn generate_particles<const D: usize>(
                     }
                     _ => unreachable!("validated"),
                 };
-                let (pts, vol) = lattice_points::<D>(r.lattice, &lo, &hi, a);
+                let (pts, vol) = match r.lattice_rotation {
+                    Some(deg) => turned_lattice_points::<D>(r.lattice, &lo, &hi, a, deg),
+                    None => lattice_points::<D>(r.lattice, &lo, &hi, a),
+                };
                 (pts.into_iter().map(|x| (x, vol)).collect(), None)
             }
         };

@@ -153,6 +153,12 @@ pub struct Region {
     pub radius: Option<f64>,
     #[serde(default = "default_lattice")]
     pub lattice: Lattice,
+    /// 2D: the lattice turned by this many degrees about the region's box centre (cubic and
+    /// hexagonal lattices), so that no lattice row lies along the flow (Rosswog (2015) §7.6.1
+    /// turns the low-density side of its shock tube by 30°). The turned lattice does not tile
+    /// a periodic axis exactly.
+    #[serde(default)]
+    pub lattice_rotation: Option<f64>,
     /// Nearest-neighbour spacing; exactly one of `spacing` and `particle_mass`.
     pub spacing: Option<f64>,
     pub particle_mass: Option<f64>,

@@ -175,6 +175,18 @@ impl Case {
     }
 
     fn validate_region(&self, i: usize, r: &Region) -> Result<(), CaseError> {
+        if let Some(deg) = r.lattice_rotation {
+            if self.case.dimension != 2
+                || !matches!(r.lattice, Lattice::Cubic | Lattice::Hexagonal)
+                || r.shape != Shape::Box
+                || !deg.is_finite()
+            {
+                return Err(CaseError(format!(
+                    "region[{i}].lattice_rotation: turns a cubic or hexagonal lattice in a 2D box region by a finite number of degrees, got {deg} on a {:?} {:?} region in {}D",
+                    r.lattice, r.shape, self.case.dimension
+                )));
+            }
+        }
         let key = |s: &str| format!("region[{i}].{s}");
         if r.hydrostatic && (self.gravity.is_none() || r.pressure.is_none()) {
             return Err(CaseError(format!(

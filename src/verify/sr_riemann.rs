@@ -322,6 +322,15 @@ mod tests {
         )
         .unwrap();
         let (sl, sr) = (rs.star_left, rs.star_right);
+        println!(
+            "Riemann I star state: P* {:.6}, v* {:.6}, n*_L {:.6}, n*_R {:.6} (N*_R = {:.6}), shock {:.6}",
+            sl.p,
+            sl.vx,
+            sl.n,
+            sr.n,
+            sr.n * sr.lorentz(),
+            rs.shock_speeds().1.unwrap()
+        );
         assert!((sl.p - 1.448).abs() < 1e-3, "P* {}", sl.p);
         assert!((sl.vx - 0.714).abs() < 1e-3, "v* {}", sl.vx);
         assert!((sl.vx - sr.vx).abs() < 1e-12 && (sl.p - sr.p).abs() < 1e-10 * sl.p);
