@@ -523,3 +523,39 @@ def wall_shock_error(run, args) -> float:
         x_shock = s["x"][beyond & (s["P"] > 0.5 * (p + p_star))].max()
         worst = max(worst, abs(x_shock - exact) / (exact - args["x0"]))
     return float(worst)
+
+
+@metric
+def wall_heating(run, args) -> float:
+    """The wall-heating excess of a reflection or collision at ``x`` (Rosswog §7.6.2): the
+    largest u of the particles within ``width`` of x over the median u of the shocked plateau
+    [plateau_from, plateau_to], minus 1 (0 without wall heating)."""
+    s = last_snapshot(run.dir)
+    u = s["u"]
+    near = np.abs(s["x"] - args.get("x", 0.0)) < args["width"]
+    plateau = (s["x"] > args["plateau_from"]) & (s["x"] < args["plateau_to"])
+    return float(u[near].max() / np.median(u[plateau]) - 1.0)
+
+
+def advected_pattern(name: str, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The computing-frame density N of Rosswog's advection tests (§7.5) in [-1, 1]² at rest:
+    "sin-cos" (Advection II, Eq. 107) or "triangle" (Advection I: N = 1 inside the
+    surface-tension triangle, 2 outside)."""
+    if name == "sin-cos":
+        return 1.0 + 0.5 * np.sin(np.pi * x) * np.cos(np.pi * y)
+    if name == "triangle":
+        s, t = np.sqrt(3.0) / 4.0, np.sqrt(3.0)
+        inside = (y > -s) & (y < t * (x + 0.5) - s) & (y < -t * (x - 0.5) - s)
+        return np.where(inside, 1.0, 2.0)
+    raise ValueError(f"advected_pattern: no pattern {name!r}")
+
+
+@metric
+def advected_l1(run, args) -> float:
+    """L1 of N at t_end against the initial pattern ``pattern`` moved exactly by v_x·t along x
+    in the periodic box [-1, 1]² (Rosswog §7.5), over the mean exact N."""
+    s = last_snapshot(run.dir)
+    t = run.summary["time"]
+    x = (s["x"] - args["vx"] * t + 1.0) % 2.0 - 1.0
+    exact = advected_pattern(args["pattern"], x, s["y"])
+    return float(np.mean(np.abs(s["rho"] - exact)) / np.mean(exact))

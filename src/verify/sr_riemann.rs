@@ -416,6 +416,18 @@ mod tests {
         let g = 5.0 / 3.0;
         let p = (g - 1.0) * 2.29e-5;
         let rs = SrRiemann::new(state(1.0, 0.9, 0.0, p), state(1.0, -0.9, 0.0, p), g).unwrap();
+        let extreme = SrRiemann::new(state(1.0, 0.9995, 0.0, p), state(1.0, -0.9995, 0.0, p), g)
+            .unwrap();
+        for (v, r) in [(0.9, &rs), (0.9995, &extreme)] {
+            let s = r.star_right;
+            println!(
+                "Riemann II at v = ±{v}: n* = N* = {:.6}, P* {:.6e}, u* {:.6e}, shock speed {:.6}",
+                s.n,
+                s.p,
+                s.p / ((g - 1.0) * s.n),
+                r.shock_speeds().1.unwrap()
+            );
+        }
         assert!(rs.star_left.vx.abs() < 1e-10);
         let (l, r) = rs.shock_speeds();
         assert!((l.unwrap() + r.unwrap()).abs() < 1e-10 && r.unwrap() > 0.0);
