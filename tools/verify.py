@@ -42,6 +42,7 @@ ROOT = Path(__file__).resolve().parent.parent
 BIN = Path(os.environ.get("SPHFMU_BIN", ROOT / "target" / "release" / "sphfmu"))
 PAPERS = {
     "rosswog": "Rosswog (2015), Boosting the accuracy of SPH (Newtonian part)",
+    "rosswog-sr": "Rosswog (2015), Boosting the accuracy of SPH (special-relativistic part)",
     "rpsph": "Abel (2011), rpSPH: a novel smoothed particle hydrodynamics algorithm",
     "crksph": "Frontiere, Raskin & Owen (2017), CRKSPH",
 }

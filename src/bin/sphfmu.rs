@@ -197,6 +197,8 @@ fn print_balances(s: &sphfmu::runner::RunSummary) {
     let with_gravity = d0.potential_energy != 0.0 || d1.potential_energy != 0.0;
     let what = if with_gravity {
         "kinetic + internal + potential in gravity"
+    } else if s.relativistic.is_some() {
+        "Σ ν (ε − 1), c = 1"
     } else {
         "kinetic + internal"
     };
@@ -210,6 +212,12 @@ fn print_balances(s: &sphfmu::runner::RunSummary) {
         "total energy ({what}) {e0:.9e} -> {e1:.9e} {}{change}",
         u.energy
     );
+    if let Some(r) = &s.relativistic {
+        println!(
+            "special relativity: largest Lorentz factor {:.4}; {} primitive recoveries, {:.2} Newton-Raphson iterations on average, {} at most, {} fell back to the cold state",
+            r.max_lorentz, r.recoveries, r.mean_iterations, r.max_iterations, r.fallbacks
+        );
+    }
     if with_gravity {
         println!(
             "  kinetic {:.4e} -> {:.4e}, internal {:.4e} -> {:.4e}, potential {:.4e} -> {:.4e} {}",

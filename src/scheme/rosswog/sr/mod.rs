@@ -104,7 +104,7 @@ pub fn recover_all<const D: usize>(
     let out: Vec<Result<recovery::Recovered, String>> = (0..p.len())
         .into_par_iter()
         .map(|i| {
-            recovery::recover(gamma_eos, s[i].norm(), eps[i], p.rho[i]).map_err(|e| {
+            recovery::recover(gamma_eos, s[i].norm(), eps[i], p.rho[i], Some(p.pressure[i])).map_err(|e| {
                 format!(
                     "primitive recovery failed on particle {} at x = {:?}: {}",
                     p.id[i],
