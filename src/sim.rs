@@ -373,8 +373,8 @@ impl<const D: usize> Simulation<D> {
             d.fluid_particles += 1;
             let nu = p.mass[a];
             d.mass += nu;
-            for k in 0..D {
-                d.momentum[k] += nu * s[a][k];
+            for (m, s_k) in d.momentum.iter_mut().zip(s[a].iter()) {
+                *m += nu * s_k;
             }
             let l = to3(&p.pos[a]).cross(&to3(&s[a])) * nu;
             for k in 0..3 {

@@ -32,7 +32,11 @@ fn riemann_one_in_1d_reaches_the_exact_solution_and_its_plateau() {
     assert!(e.l1_density < 0.07 && e.l1_velocity < 6e-3 && e.l1_pressure < 0.025);
     let r = summary.relativistic.unwrap();
     // γ* = 1.43 behind the shock; measured 1.478 at its overshoot, 8.2 iterations per recovery
-    assert!(r.max_lorentz > 1.4 && r.max_lorentz < 1.6, "{}", r.max_lorentz);
+    assert!(
+        r.max_lorentz > 1.4 && r.max_lorentz < 1.6,
+        "{}",
+        r.max_lorentz
+    );
     assert_eq!(r.fallbacks, 0);
     assert!(r.mean_iterations < 20.0);
     // energy Σ ν (ε − 1): measured 3.6e-14 relative
@@ -52,7 +56,11 @@ fn riemann_one_plateau_is_reached_in_1d() {
         .map(|i| p.rho[i])
         .collect();
     let mean = sel.iter().sum::<f64>() / sel.len() as f64;
-    println!("SR Riemann I plateau: N = {mean:.4} over {} particles, {:.4} of N*", sel.len(), mean / 7.2427);
+    println!(
+        "SR Riemann I plateau: N = {mean:.4} over {} particles, {:.4} of N*",
+        sel.len(),
+        mean / 7.2427
+    );
     // measured 1.0x
     assert!((mean / 7.2427 - 1.0).abs() < 0.03, "{mean}");
 }
@@ -62,7 +70,12 @@ fn f1_to_f4_conserve_momentum_and_energy_to_round_off() {
     // the violent random periodic box of the Newtonian conservation tests (|v| ≤ 0.41, a hot
     // dense disc), each SR preset, 20 SSP-RK3 steps: Σ ν S and Σ ν (ε − 1) are sums of
     // pairwise antisymmetric terms, which every RK stage keeps
-    for scheme in ["rosswog-sr-f1", "rosswog-sr-f2", "rosswog-sr-f3", "rosswog-sr-f4"] {
+    for scheme in [
+        "rosswog-sr-f1",
+        "rosswog-sr-f2",
+        "rosswog-sr-f3",
+        "rosswog-sr-f4",
+    ] {
         let text = random_box(&format!("name = \"{scheme}\""), "", (0.04, 0.03));
         let mut sim = Case::parse(&text).unwrap().build::<2>().unwrap();
         let drift = common::momentum_exact_energy_drift(&mut sim, 20, scheme);
@@ -152,8 +165,16 @@ fn sr_refuses_what_it_cannot_run_with_a_named_error() {
             "pressure = 1e-6\nvelocity = [-1.5]",
             &["region[1].velocity", "c = 1"],
         ),
-        ("density = 1.0", "density = -1.0", &["region[1].density", "> 0"]),
-        ("pressure = 1e-6", "pressure = -2.0", &["region[1].pressure", "> 0"]),
+        (
+            "density = 1.0",
+            "density = -1.0",
+            &["region[1].density", "> 0"],
+        ),
+        (
+            "pressure = 1e-6",
+            "pressure = -2.0",
+            &["region[1].pressure", "> 0"],
+        ),
         (
             "type = \"ideal-gas\"\ngamma = 1.6666666666666667",
             "type = \"tait\"\nrho0 = 1000.0\nsound_speed = 20.0",
@@ -169,7 +190,11 @@ fn sr_refuses_what_it_cannot_run_with_a_named_error() {
             "t_end = 0.3\nintegrator = \"leapfrog\"",
             &["time.integrator", "ssp-rk3"],
         ),
-        ("[case]", "gravity = [-1.0]\n[case]", &["gravity", "special-relativistic"]),
+        (
+            "[case]",
+            "gravity = [-1.0]\n[case]",
+            &["gravity", "special-relativistic"],
+        ),
     ];
     for (from, to, needles) in cases {
         let e = err(from, to);
@@ -178,13 +203,13 @@ fn sr_refuses_what_it_cannot_run_with_a_named_error() {
         }
     }
     // bodies have no SR form (the gas-spring piston of models/piston2d.toml)
-    let piston = model_text("piston2d.toml").replacen(
-        "name = \"standard\"",
-        "name = \"rosswog-sr-f1\"",
-        1,
-    );
+    let piston =
+        model_text("piston2d.toml").replacen("name = \"standard\"", "name = \"rosswog-sr-f1\"", 1);
     let e = Case::parse(&piston).expect_err("a piston with SR").0;
-    assert!(e.starts_with("body:") && e.contains("special-relativistic"), "{e}");
+    assert!(
+        e.starts_with("body:") && e.contains("special-relativistic"),
+        "{e}"
+    );
     // the FMU (through the coupling engine) refuses SR presets by name
     let case = Case::parse(&sod).unwrap();
     let e = sphfmu::coupling::Coupling::new(&case, &Default::default())

@@ -389,7 +389,9 @@ impl Case {
         refuse("frame", self.frame.is_some())?;
         refuse(
             "gravity",
-            self.gravity.as_ref().is_some_and(|g| g.iter().any(|x| *x != 0.0)),
+            self.gravity
+                .as_ref()
+                .is_some_and(|g| g.iter().any(|x| *x != 0.0)),
         )?;
         if self.integrator() != crate::integrate::IntegratorKind::SspRk3 {
             return Err(CaseError(format!(
@@ -403,14 +405,14 @@ impl Case {
             refuse(&format!("region[{i}].hydrostatic"), r.hydrostatic)?;
             if let Some(v) = &r.velocity {
                 let speed = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-                if !(speed < 1.0) {
+                if speed.is_nan() || speed >= 1.0 {
                     return Err(CaseError(format!(
                         "region[{i}].velocity: |v| must be < 1 (the speed of light, c = 1) with {name}, got {speed}"
                     )));
                 }
             }
             if let Some(vr) = r.radial_velocity {
-                if !(vr.abs() < 1.0) {
+                if vr.is_nan() || vr.abs() >= 1.0 {
                     return Err(CaseError(format!(
                         "region[{i}].radial_velocity: must be in (−1, 1) (c = 1) with {name}, got {vr}"
                     )));

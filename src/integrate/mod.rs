@@ -97,7 +97,11 @@ impl<const D: usize> Integrator<D> {
             .chain(&s.vel)
             .all(|x| x.iter().all(|c| c.is_finite()))
             && s.momentum.iter().all(|x| x.iter().all(|c| c.is_finite()))
-            && s.u.iter().chain(&s.rho).chain(&s.energy).all(|x| x.is_finite())
+            && s.u
+                .iter()
+                .chain(&s.rho)
+                .chain(&s.energy)
+                .all(|x| x.is_finite())
             && s.entropy.iter().flatten().all(|x| x.is_finite());
         if ok {
             Ok(())

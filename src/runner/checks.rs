@@ -274,7 +274,14 @@ fn verify_riemann<const D: usize>(
             } else {
                 r
             };
-            (x, if n > 0.0 { pp / ((gamma - 1.0) * n) } else { 0.0 })
+            (
+                x,
+                if n > 0.0 {
+                    pp / ((gamma - 1.0) * n)
+                } else {
+                    0.0
+                },
+            )
         })
         .collect();
     let caption = format!(

@@ -305,7 +305,9 @@ fn run_dim<const D: usize>(
                 };
                 let (scale, mass) = (0..p.len())
                     .filter(|&i| p.body[i] == 0 && p.port[i] == 0)
-                    .fold((0.0, 0.0), |(s, m), i| (s + p.mass[i] * momentum(i), m + p.mass[i]));
+                    .fold((0.0, 0.0), |(s, m), i| {
+                        (s + p.mass[i] * momentum(i), m + p.mass[i])
+                    });
                 max_abs_momentum = max_abs_momentum.max(scale);
                 // every integrator applies g over the whole step: Σ_steps M g dt exactly (the
                 // step's own dt: last_dt skips the shortened steps that land on a target)
@@ -419,8 +421,7 @@ fn run_dim<const D: usize>(
             let st = &sim.sys.stats;
             RecoverySummary {
                 recoveries: st.sr_recoveries,
-                mean_iterations: st.sr_recovery_iterations as f64
-                    / st.sr_recoveries.max(1) as f64,
+                mean_iterations: st.sr_recovery_iterations as f64 / st.sr_recoveries.max(1) as f64,
                 max_iterations: st.sr_recovery_max_iterations,
                 fallbacks: st.sr_recovery_fallbacks,
                 max_lorentz: max_lorentz.max(last.max_lorentz),

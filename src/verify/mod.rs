@@ -7,7 +7,6 @@ pub mod sedov;
 pub mod sr_riemann;
 pub mod vortex;
 
-
 /// Errors of a 1D shock-tube profile against the exact Riemann solution.
 #[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct ShockTubeErrors {

@@ -42,9 +42,13 @@ const FAN_STEPS: usize = 4000;
 
 #[derive(Debug, Clone)]
 enum Wave {
-    Shock { speed: f64 },
+    Shock {
+        speed: f64,
+    },
     /// (ξ, state) along the fan from the outer state to the star state.
-    Fan { table: Vec<(f64, SrPrimitive)> },
+    Fan {
+        table: Vec<(f64, SrPrimitive)>,
+    },
 }
 
 #[derive(Debug, Clone)]
@@ -84,7 +88,9 @@ impl Side {
     fn eigen(&self, s: &SrPrimitive) -> f64 {
         let c = self.sound(s.n, s.p);
         let (c2, v2) = (c * c, s.vx * s.vx + s.vt * s.vt);
-        let root = ((1.0 - v2) * (1.0 - s.vx * s.vx - s.vt * s.vt * c2)).max(0.0).sqrt();
+        let root = ((1.0 - v2) * (1.0 - s.vx * s.vx - s.vt * s.vt * c2))
+            .max(0.0)
+            .sqrt();
         (s.vx * (1.0 - c2) + self.sign * c * root) / (1.0 - v2 * c2)
     }
 
@@ -104,12 +110,21 @@ impl Side {
         let j2 = -dp / (hb / nb - ha / a.n);
         let j = self.sign * j2.max(0.0).sqrt();
         let m = a.n * a.n * wa * wa;
-        let vs = (m * a.vx + self.sign * j.abs() * (j2 + m * (1.0 - a.vx * a.vx)).sqrt()) / (m + j2);
+        let vs =
+            (m * a.vx + self.sign * j.abs() * (j2 + m * (1.0 - a.vx * a.vx)).sqrt()) / (m + j2);
         let ws = 1.0 / (1.0 - vs * vs).sqrt();
-        let vb = (ha * wa * a.vx + ws * dp / j)
-            / (ha * wa + dp * (ws * a.vx / j + 1.0 / (a.n * wa)));
+        let vb =
+            (ha * wa * a.vx + ws * dp / j) / (ha * wa + dp * (ws * a.vx / j + 1.0 / (a.n * wa)));
         let vt = self.tangential(ha * wa * a.vt, hb, vb);
-        (SrPrimitive { n: nb, vx: vb, vt, p }, vs)
+        (
+            SrPrimitive {
+                n: nb,
+                vx: vb,
+                vt,
+                p,
+            },
+            vs,
+        )
     }
 
     /// dv^x/d ln P along the isentrope through `s0`'s entropy at pressure p.
@@ -181,16 +196,13 @@ impl SrRiemann {
             }
         }
         if !(gamma > 1.0 && gamma <= 2.0) {
-            return Err(format!("the SR Riemann solver needs 1 < Γ ≤ 2, got {gamma}"));
+            return Err(format!(
+                "the SR Riemann solver needs 1 < Γ ≤ 2, got {gamma}"
+            ));
         }
-        let (l, r) = (
-            Side { gamma, sign: -1.0 },
-            Side { gamma, sign: 1.0 },
-        );
+        let (l, r) = (Side { gamma, sign: -1.0 }, Side { gamma, sign: 1.0 });
         // coarse fans while bracketing P*; the final waves are tabulated finely
-        let mismatch = |p: f64| {
-            l.behind(&left, p, 400).0.vx - r.behind(&right, p, 400).0.vx
-        };
+        let mismatch = |p: f64| l.behind(&left, p, 400).0.vx - r.behind(&right, p, 400).0.vx;
         // v_L*(P) falls and v_R*(P) rises with P: the difference falls through zero
         let (mut lo, mut hi) = (left.p.min(right.p), left.p.max(right.p));
         while mismatch(lo) < 0.0 {
@@ -357,7 +369,11 @@ mod tests {
         assert!((sl.n - 0.0912).abs() < 5e-4, "n*_L {}", sl.n);
         let w = 1.0 / (1.0 - sr.vx * sr.vx).sqrt();
         let strong = (5.0 / 3.0 * w + 1.0) / (2.0 / 3.0);
-        assert!(sr.n < strong && sr.n > 0.99 * strong, "n*_R {} vs {strong}", sr.n);
+        assert!(
+            sr.n < strong && sr.n > 0.99 * strong,
+            "n*_R {} vs {strong}",
+            sr.n
+        );
         let vs = rs.shock_speeds().1.unwrap();
         assert!((vs - 0.986).abs() < 1e-3, "shock {vs}");
     }
@@ -368,7 +384,10 @@ mod tests {
     #[test]
     fn shocks_conserve_across_the_jump_with_tangential_velocity() {
         let g = 5.0 / 3.0;
-        let side = Side { gamma: g, sign: 1.0 };
+        let side = Side {
+            gamma: g,
+            sign: 1.0,
+        };
         for &(vx, vt) in &[(0.0, 0.0), (-0.3, 0.5), (0.5, 0.7), (-0.9, 0.3)] {
             let a = state(1.0, vx, vt, 0.1);
             let (b, vs) = side.shock(&a, 3.0);
@@ -384,7 +403,12 @@ mod tests {
             let (fa, fb) = (flux(&a), flux(&b));
             for k in 0..4 {
                 let scale = fa[k].abs().max(fb[k].abs()).max(1.0);
-                assert!((fa[k] - fb[k]).abs() < 1e-10 * scale, "v {vx},{vt}: flux {k} {} vs {}", fa[k], fb[k]);
+                assert!(
+                    (fa[k] - fb[k]).abs() < 1e-10 * scale,
+                    "v {vx},{vt}: flux {k} {} vs {}",
+                    fa[k],
+                    fb[k]
+                );
             }
         }
     }
@@ -395,7 +419,10 @@ mod tests {
     #[test]
     fn rarefactions_keep_the_riemann_invariant() {
         let g = 5.0 / 3.0;
-        let side = Side { gamma: g, sign: -1.0 };
+        let side = Side {
+            gamma: g,
+            sign: -1.0,
+        };
         let a = state(10.0, 0.1, 0.0, 40.0 / 3.0);
         let inv = |s: &SrPrimitive| {
             let c = side.sound(s.n, s.p);
@@ -404,7 +431,12 @@ mod tests {
         };
         let table = side.fan(&a, 1.0, 4000);
         let end = table.last().unwrap().1;
-        assert!((inv(&end) - inv(&a)).abs() < 1e-12, "{} vs {}", inv(&end), inv(&a));
+        assert!(
+            (inv(&end) - inv(&a)).abs() < 1e-12,
+            "{} vs {}",
+            inv(&end),
+            inv(&a)
+        );
         // the fan widens: ξ grows from head to tail for a left wave
         assert!(table.windows(2).all(|w| w[1].0 > w[0].0));
     }
@@ -416,8 +448,8 @@ mod tests {
         let g = 5.0 / 3.0;
         let p = (g - 1.0) * 2.29e-5;
         let rs = SrRiemann::new(state(1.0, 0.9, 0.0, p), state(1.0, -0.9, 0.0, p), g).unwrap();
-        let extreme = SrRiemann::new(state(1.0, 0.9995, 0.0, p), state(1.0, -0.9995, 0.0, p), g)
-            .unwrap();
+        let extreme =
+            SrRiemann::new(state(1.0, 0.9995, 0.0, p), state(1.0, -0.9995, 0.0, p), g).unwrap();
         for (v, r) in [(0.9, &rs), (0.9995, &extreme)] {
             let s = r.star_right;
             println!(
@@ -434,6 +466,10 @@ mod tests {
         // a strong relativistic shock: compression (Γ W + 1)/(Γ − 1) ≈ 7.2 in the rest frame
         let w = 1.0 / (1.0 - 0.81f64).sqrt();
         let expect = (g * w + 1.0) / (g - 1.0);
-        assert!((rs.star_left.n / expect - 1.0).abs() < 1e-3, "{} vs {expect}", rs.star_left.n);
+        assert!(
+            (rs.star_left.n / expect - 1.0).abs() < 1e-3,
+            "{} vs {expect}",
+            rs.star_left.n
+        );
     }
 }

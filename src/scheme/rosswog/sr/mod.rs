@@ -104,7 +104,14 @@ pub fn recover_all<const D: usize>(
     let out: Vec<Result<recovery::Recovered, String>> = (0..p.len())
         .into_par_iter()
         .map(|i| {
-            recovery::recover(gamma_eos, s[i].norm(), eps[i], p.rho[i], Some(p.pressure[i])).map_err(|e| {
+            recovery::recover(
+                gamma_eos,
+                s[i].norm(),
+                eps[i],
+                p.rho[i],
+                Some(p.pressure[i]),
+            )
+            .map_err(|e| {
                 format!(
                     "primitive recovery failed on particle {} at x = {:?}: {}",
                     p.id[i],
@@ -320,9 +327,8 @@ impl<const D: usize> Scheme<D> for RosswogSr {
                 let e = pr.dx / pr.r;
                 let (va_par, vb_par) = (ra.v.dot(&e), pr.vb.dot(&e));
                 // Eqs. 77–79
-                let vsig = recovery::signal_speed(va_par, ra.v.norm_squared(), ra.c).max(
-                    recovery::signal_speed(vb_par, pr.vb.norm_squared(), rb.c),
-                );
+                let vsig = recovery::signal_speed(va_par, ra.v.norm_squared(), ra.c)
+                    .max(recovery::signal_speed(vb_par, pr.vb.norm_squared(), rb.c));
                 o.vsig = o.vsig.max(vsig);
                 let w = va_par - vb_par;
                 // approaching (v_ab·r_ab < 0) beyond round-off, as in the Newtonian loop
