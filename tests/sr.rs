@@ -218,3 +218,85 @@ fn sr_refuses_what_it_cannot_run_with_a_named_error() {
         .0;
     assert!(e.contains("scheme.name") && e.contains("CLI"), "{e}");
 }
+
+/// A 1D periodic SR case on [lo, hi] with F1: two regions split at 0 with rest-frame
+/// [n, v, P] each, `n_per_side` particles on each side.
+fn two_streams_1d(
+    lo: f64,
+    hi: f64,
+    left: [f64; 3],
+    right: [f64; 3],
+    n_per_side: usize,
+    t: f64,
+) -> String {
+    let spacing = (0.0 - lo) / n_per_side as f64;
+    format!(
+        "{}[scheme]\nname = \"rosswog-sr-f1\"\n[time]\nt_end = {t:?}\n[output]\nsnapshot_every = 0.0\nformats = [\"csv\"]\n\
+         [[region]]\nmin = [{lo:?}]\nmax = [0.0]\nspacing = {spacing:?}\ndensity = {:?}\nvelocity = [{:?}]\npressure = {:?}\n\
+         [[region]]\nmin = [0.0]\nmax = [{hi:?}]\nspacing = {spacing:?}\ndensity = {:?}\nvelocity = [{:?}]\npressure = {:?}\n\
+         [verify]\ntype = \"riemann\"\nx0 = 0.0\nleft = [{:?}, {:?}, {:?}]\nright = [{:?}, {:?}, {:?}]\nx_min = {:?}\nx_max = {:?}\n",
+        common::header(1, lo, hi, "periodic", 5.0 / 3.0),
+        left[0], left[1], left[2], right[0], right[1], right[2],
+        left[0], left[1], left[2], right[0], right[1], right[2],
+        0.5 * lo, 0.5 * hi
+    )
+}
+
+#[test]
+fn riemann_two_in_1d_stops_the_streams_on_the_exact_plateau_with_wall_heating() {
+    // Rosswog's Riemann II (§7.6.2) in 1D: v = ±0.9, n = 1, u = 2.29e-5, t = 0.875; exact
+    // N* = 7.2353 at rest between shocks at ±0.3656 (src/verify/sr_riemann.rs)
+    let p0 = 2.0 / 3.0 * 2.29e-5;
+    let text = two_streams_1d(-2.0, 2.0, [1.0, 0.9, p0], [1.0, -0.9, p0], 1000, 0.875);
+    let sim = run_1d(&text, 0.875);
+    let p = &sim.sys.particles;
+    let in_band = |lo: f64, hi: f64| -> Vec<usize> {
+        (0..p.len())
+            .filter(|&i| p.pos[i][0].abs() > lo && p.pos[i][0].abs() < hi)
+            .collect()
+    };
+    let plateau = in_band(0.16, 0.30);
+    let n_mean = plateau.iter().map(|&i| p.rho[i]).sum::<f64>() / plateau.len() as f64;
+    let mut u: Vec<f64> = plateau.iter().map(|&i| p.u[i]).collect();
+    u.sort_by(f64::total_cmp);
+    let u_wall = in_band(0.0, 0.02)
+        .iter()
+        .map(|&i| p.u[i])
+        .fold(0.0, f64::max);
+    let heating = u_wall / u[u.len() / 2] - 1.0;
+    let v_max = plateau
+        .iter()
+        .map(|&i| p.vel[i][0].abs())
+        .fold(0.0, f64::max);
+    println!(
+        "SR Riemann II, 1D F1: plateau N {n_mean:.4} ({:.4} of N*), wall heating {heating:.3}, largest |v| on the plateau {v_max:.2e}",
+        n_mean / 7.2353
+    );
+    // measured 1.0000 of N*, heating 0.183, |v| 1.4e-3
+    assert!((n_mean / 7.2353 - 1.0).abs() < 0.01, "{n_mean}");
+    assert!(heating > 0.06 && heating < 0.5, "{heating}");
+    assert!(v_max < 5e-3, "{v_max}");
+}
+
+#[test]
+fn riemann_three_in_1d_follows_the_exact_rarefactions() {
+    // Rosswog's Riemann III (§7.6.3) in 1D: n = 0.1, P = 0.05, v = ∓0.5, t = 0.3, compared
+    // over |x| < 0.225 (the shocks where the streams meet across the periodic ends stay out)
+    let text = two_streams_1d(-0.45, 0.45, [0.1, -0.5, 0.05], [0.1, 0.5, 0.05], 400, 0.3);
+    let case = Case::parse(&text).unwrap();
+    let summary =
+        sphfmu::runner::run_case(&case, tempfile::tempdir().unwrap().path(), &mut |_| {}).unwrap();
+    let e = summary.shock_tube.unwrap();
+    println!(
+        "SR Riemann III, 1D F1: L1(N) {:.3e} ({:.2} % of N0), L1(v) {:.3e}, L1(P) {:.3e}",
+        e.l1_density,
+        100.0 * e.l1_density / 0.11547,
+        e.l1_velocity,
+        e.l1_pressure
+    );
+    // measured 6.9e-4 (0.59 % of N0) and 5.6e-3
+    assert!(
+        e.l1_density < 0.015 * 0.11547 && e.l1_velocity < 0.015,
+        "{e:?}"
+    );
+}
