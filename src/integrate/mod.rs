@@ -206,14 +206,10 @@ fn enforce_boundaries<const D: usize>(sys: &mut System<D>) {
         Some(sr) => p
             .pos
             .par_iter_mut()
-            .zip(p.vel.par_iter_mut())
             .zip(p.extra_vectors[sr.momentum].par_iter_mut())
-            .for_each(|((x, v), s)| {
-                // S decides the direction (v is the previous stage's until the recovery)
-                let mut x_s = *x;
-                dom.enforce(&mut x_s, s);
-                dom.enforce(x, v);
-            }),
+            // S decides the direction; v is the previous stage's until the next evaluation
+            // recovers it from S
+            .for_each(|(x, s)| dom.enforce(x, s)),
     }
 }
 

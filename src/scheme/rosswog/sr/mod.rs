@@ -243,8 +243,8 @@ impl<const D: usize> Scheme<D> for RosswogSr {
         for i in 0..p.len() {
             let v = p.vel[i];
             let (n, u) = (p.rho[i], p.u[i]);
-            let lorentz = 1.0 / (1.0 - v.norm_squared()).sqrt();
-            if !(lorentz.is_finite() && n > 0.0 && u > 0.0) && self.bad_state.is_none() {
+            let c = recovery::conserved(g, n, u, v.norm_squared());
+            if !(c.lorentz.is_finite() && n > 0.0 && u > 0.0) && self.bad_state.is_none() {
                 self.bad_state = Some(format!(
                     "particle {} at x = {:?}: the initial state needs |v| < 1 (c = 1), n > 0 and P > 0, got |v| = {}, n = {n}, u = {u}",
                     p.id[i],
@@ -252,15 +252,13 @@ impl<const D: usize> Scheme<D> for RosswogSr {
                     v.norm()
                 ));
             }
-            let pr = (g - 1.0) * n * u;
-            let e = 1.0 + u + pr / n;
-            p.mass[i] *= lorentz;
-            p.rho[i] = lorentz * n;
-            p.pressure[i] = pr;
-            p.sound_speed[i] = recovery::sound_speed(g, e);
-            p.extra_vectors[slots.momentum][i] = v * (lorentz * e);
-            p.extra_scalars[slots.energy][i] = lorentz * e - pr / (lorentz * n);
-            p.extra_scalars[slots.lorentz][i] = lorentz;
+            p.mass[i] *= c.lorentz;
+            p.rho[i] = c.lorentz * n;
+            p.pressure[i] = c.p;
+            p.sound_speed[i] = recovery::sound_speed(g, c.enthalpy);
+            p.extra_vectors[slots.momentum][i] = v * c.s_over_v;
+            p.extra_scalars[slots.energy][i] = c.eps;
+            p.extra_scalars[slots.lorentz][i] = c.lorentz;
         }
         let k0 = if self.params.triggers && self.params.k_constant_until <= 0.0 {
             self.params.k_min

@@ -41,14 +41,31 @@ pub const U_FLOOR_ABS: f64 = 1e-14;
 /// Largest Newton–Raphson iterations before the bracket's bisection decides.
 const MAX_ITERATIONS: u32 = 200;
 
-/// Canonical momentum magnitude |S| = γ E |v| and canonical energy ε = γ E − P/N of a
-/// rest-frame state (n, u, |v|) (Eqs. 54, 57).
-pub fn conserved(gamma_eos: f64, n: f64, u: f64, v: f64) -> (f64, f64, f64) {
-    let lorentz = 1.0 / (1.0 - v * v).sqrt();
+/// The computing-frame state of a rest-frame one (n, u, |v|²) (Eqs. 46, 54, 57, 59, 62):
+/// the factor γE of S = γE v, the canonical energy ε = γE − P/N, the Lorentz factor γ, the
+/// pressure P and the enthalpy E.
+pub fn conserved(gamma_eos: f64, n: f64, u: f64, v2: f64) -> Conserved {
+    let lorentz = 1.0 / (1.0 - v2).sqrt();
     let p = (gamma_eos - 1.0) * n * u;
-    let e = 1.0 + u + p / n;
-    let big_n = lorentz * n;
-    (lorentz * e * v, lorentz * e - p / big_n, lorentz)
+    let enthalpy = 1.0 + u + p / n;
+    Conserved {
+        s_over_v: lorentz * enthalpy,
+        eps: lorentz * enthalpy - p / (lorentz * n),
+        lorentz,
+        p,
+        enthalpy,
+    }
+}
+
+/// What [`conserved`] returns.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Conserved {
+    /// γE: S = γE v.
+    pub s_over_v: f64,
+    pub eps: f64,
+    pub lorentz: f64,
+    pub p: f64,
+    pub enthalpy: f64,
 }
 
 /// Relativistic sound speed c_s² = (Γ − 1)(E − 1)/E (Eq. 63).
@@ -274,7 +291,8 @@ mod tests {
             for &n in &[0.1, 1.0, 10.0] {
                 for &p_over_n in &[1e-8, 1e-3, 1.0, 1e3] {
                     let u = p_over_n / (g - 1.0);
-                    let (s, eps, lorentz) = conserved(g, n, u, v);
+                    let c = conserved(g, n, u, v * v);
+                    let (s, eps, lorentz) = (c.s_over_v * v, c.eps, c.lorentz);
                     let big_n = lorentz * n;
                     let p = (g - 1.0) * n * u;
                     let r = recover(g, s, eps, big_n, None).unwrap();
@@ -339,7 +357,8 @@ mod tests {
     #[test]
     fn unphysical_energy_is_floored_and_reported() {
         let g = 5.0 / 3.0;
-        let (s, eps, lorentz) = conserved(g, 1.0, 1e-3, 0.5);
+        let c = conserved(g, 1.0, 1e-3, 0.25);
+        let (s, eps, lorentz) = (c.s_over_v * 0.5, c.eps, c.lorentz);
         // take away more than the thermal energy
         let r = recover(g, s, eps - 0.01, lorentz, None).unwrap();
         assert!(r.floored);
