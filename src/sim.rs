@@ -310,13 +310,7 @@ impl<const D: usize> Simulation<D> {
             return self.relativistic_diagnostics(sr);
         }
         let p = &self.sys.particles;
-        let mut d = Diagnostics {
-            time: self.time,
-            step: self.steps,
-            dt: self.last_dt,
-            particles: p.len(),
-            ..Default::default()
-        };
+        let mut d = self.diagnostics_header();
         let g = if self.sys.frame.is_none() {
             self.sys.gravity
         } else {
@@ -346,8 +340,19 @@ impl<const D: usize> Simulation<D> {
             d.potential_energy -= m * g.dot(&x);
         }
         d.total_energy = d.kinetic_energy + d.internal_energy + d.potential_energy;
-        d.max_lorentz = 1.0;
         d
+    }
+
+    /// Time, step and counts of [`Diagnostics`], every total zero, the Lorentz factor 1.
+    fn diagnostics_header(&self) -> Diagnostics {
+        Diagnostics {
+            time: self.time,
+            step: self.steps,
+            dt: self.last_dt,
+            particles: self.sys.particles.len(),
+            max_lorentz: 1.0,
+            ..Default::default()
+        }
     }
 
     /// The conserved totals of a special-relativistic run (Rosswog (2015) Eqs. 54, 56):
@@ -356,14 +361,7 @@ impl<const D: usize> Simulation<D> {
     /// Σ ν (γ − 1) and internal the rest.
     fn relativistic_diagnostics(&self, sr: crate::scheme::rosswog::sr::SrSlots) -> Diagnostics {
         let p = &self.sys.particles;
-        let mut d = Diagnostics {
-            time: self.time,
-            step: self.steps,
-            dt: self.last_dt,
-            particles: p.len(),
-            max_lorentz: 1.0,
-            ..Default::default()
-        };
+        let mut d = self.diagnostics_header();
         let (s, eps, lorentz) = (
             &p.extra_vectors[sr.momentum],
             &p.extra_scalars[sr.energy],

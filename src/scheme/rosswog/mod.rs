@@ -346,6 +346,20 @@ fn dissipative_heating<const D: usize>(
     kv * du_ab * e.dot(dab) + 0.5 * pi * vab.dot(dab)
 }
 
+/// The state the Rosswog schemes carry between steps: whether the triggers have seen a step
+/// (their first step has no previous ∇·v), as one 0/1 value.
+pub(crate) fn first_step_state(first_step: bool) -> Vec<f64> {
+    vec![if first_step { 1.0 } else { 0.0 }]
+}
+
+/// The flag of [`first_step_state`] back from a saved state of scheme `name`.
+pub(crate) fn first_step_from(name: &str, state: &[f64]) -> Result<bool, String> {
+    match state {
+        [f] if *f == 0.0 || *f == 1.0 => Ok(*f == 1.0),
+        _ => Err(format!("{name}: expected one 0/1 flag, got {state:?}")),
+    }
+}
+
 /// g_a (or g_b) of the pair (a, b), standing in for ∇_a W (Eqs. 66/67) with particle i's
 /// smoothing length h: IA, C_i (r_b − r_a) W(h), or, on fallback and in the kernel
 /// formulations, dW/dr · r̂_ab. `dx` = r_a − r_b; a mirror image (`code` ≠ 0) carries the
@@ -548,19 +562,11 @@ impl<const D: usize> Scheme<D> for Rosswog {
 
     /// Whether the trigger has seen a step yet (its first step has no previous ∇·v).
     fn carried_state(&self) -> Vec<f64> {
-        vec![if self.first_step { 1.0 } else { 0.0 }]
+        first_step_state(self.first_step)
     }
 
     fn set_carried_state(&mut self, state: &[f64]) -> Result<(), String> {
-        match state {
-            [f] if *f == 0.0 || *f == 1.0 => {
-                self.first_step = *f == 1.0;
-                Ok(())
-            }
-            _ => Err(format!(
-                "{}: expected one 0/1 flag, got {state:?}",
-                <Self as Scheme<D>>::name(self)
-            )),
-        }
+        self.first_step = first_step_from(<Self as Scheme<D>>::name(self), state)?;
+        Ok(())
     }
 }

@@ -24,8 +24,9 @@ pub mod recovery;
 
 use super::triggers;
 use super::{
-    density_and_pressure, gradients, pair_gradient, GradientOperator, Preset, RosswogOverrides,
-    RosswogParams, SignalVelocity, TriggerLevels, APPROACH_TOLERANCE,
+    density_and_pressure, first_step_from, first_step_state, gradients, pair_gradient,
+    GradientOperator, Preset, RosswogOverrides, RosswogParams, SignalVelocity, TriggerLevels,
+    APPROACH_TOLERANCE,
 };
 use crate::particles::Vector;
 use crate::scheme::{Scheme, SchemeError};
@@ -382,19 +383,11 @@ impl<const D: usize> Scheme<D> for RosswogSr {
     }
 
     fn carried_state(&self) -> Vec<f64> {
-        vec![if self.first_step { 1.0 } else { 0.0 }]
+        first_step_state(self.first_step)
     }
 
     fn set_carried_state(&mut self, state: &[f64]) -> Result<(), String> {
-        match state {
-            [f] if *f == 0.0 || *f == 1.0 => {
-                self.first_step = *f == 1.0;
-                Ok(())
-            }
-            _ => Err(format!(
-                "{}: expected one 0/1 flag, got {state:?}",
-                <Self as Scheme<D>>::name(self)
-            )),
-        }
+        self.first_step = first_step_from(<Self as Scheme<D>>::name(self), state)?;
+        Ok(())
     }
 }

@@ -205,6 +205,17 @@ pub fn recover(
             floored: true,
         })
     };
+    // the root found after `it` iterations (a negative u there: the cold state instead)
+    let root = |q: Primitive, it: u32, lo: f64| -> Result<Recovered, RecoveryError> {
+        if q.u < 0.0 {
+            return floored_state(lo);
+        }
+        Ok(Recovered {
+            prim: q,
+            iterations: it,
+            floored: false,
+        })
+    };
     match q_lo {
         Some(q) if f(&q) <= 0.0 => {}
         // no root above P_lo: the thermal energy would be negative
@@ -237,14 +248,7 @@ pub fn recover(
         let terms = (eps / g + (q.p * (1.0 - g * g) / (g * big_n)).abs()) * (1.0 + g * g) + 1.0;
         let noise = 8.0 * f64::EPSILON * (q.p + g1 * q.n * terms);
         if fp.abs() <= noise {
-            if q.u < 0.0 {
-                return floored_state(lo);
-            }
-            return Ok(Recovered {
-                prim: q,
-                iterations: it,
-                floored: false,
-            });
+            return root(q, it, lo);
         }
         if fp > 0.0 {
             hi = p;
@@ -263,14 +267,7 @@ pub fn recover(
             let q = prim_at(p).ok_or_else(|| {
                 RecoveryError(format!("no velocity below c at the root P = {p:e}"))
             })?;
-            if q.u < 0.0 {
-                return floored_state(lo);
-            }
-            return Ok(Recovered {
-                prim: q,
-                iterations: it,
-                floored: false,
-            });
+            return root(q, it, lo);
         }
     }
     Err(RecoveryError(format!(
