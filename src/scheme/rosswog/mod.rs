@@ -83,6 +83,18 @@ pub struct RosswogParams {
     pub k_constant_until: f64,
 }
 
+impl RosswogParams {
+    /// K at the start: K_min when the triggers run from t = 0, else the constant K (constant
+    /// dissipation, or the triggers' start-up phase before `k_constant_until`).
+    pub fn initial_k(&self) -> f64 {
+        if self.triggers && self.k_constant_until <= 0.0 {
+            self.k_min
+        } else {
+            self.k_constant
+        }
+    }
+}
+
 /// The four formulations F1–F4 the paper compares.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Preset {
@@ -346,6 +358,17 @@ fn dissipative_heating<const D: usize>(
     kv * du_ab * e.dot(dab) + 0.5 * pi * vab.dot(dab)
 }
 
+/// The IA matrices of every particle (and the fIA ∇·v the triggers read), with their time
+/// and the kernel-gradient fallbacks in the run statistics.
+pub(crate) fn ia_matrices<const D: usize>(sys: &mut System<D>) -> Vec<gradients::IaMatrix<D>> {
+    let t0 = std::time::Instant::now();
+    let (mats, _grads, fallbacks) = gradients::ia_pass(sys);
+    sys.stats.ia_fallbacks = fallbacks;
+    sys.stats.ia_fallbacks_total += fallbacks;
+    sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
+    mats
+}
+
 /// The state the Rosswog schemes carry between steps: whether the triggers have seen a step
 /// (their first step has no previous ∇·v), as one 0/1 value.
 pub(crate) fn first_step_state(first_step: bool) -> Vec<f64> {
@@ -440,21 +463,13 @@ impl<const D: usize> Scheme<D> for Rosswog {
         self.prev_div_slot = sys.particles.add_scalar_field(0.0);
         // Pressures of the initial condition seed X = P^k.
         sys.update_eos();
-        let k0 = if self.params.triggers && self.params.k_constant_until <= 0.0 {
-            self.params.k_min
-        } else {
-            self.params.k_constant
-        };
+        let k0 = self.params.initial_k();
         sys.particles.alpha.iter_mut().for_each(|a| *a = k0);
     }
 
     fn evaluate(&mut self, sys: &mut System<D>) -> Result<(), SchemeError> {
         let xw = self.density(sys);
-        let t0 = std::time::Instant::now();
-        let (mats, _grads, fallbacks) = gradients::ia_pass(sys);
-        sys.stats.ia_fallbacks = fallbacks;
-        sys.stats.ia_fallbacks_total += fallbacks;
-        sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
+        let mats = ia_matrices(sys);
         let t0 = std::time::Instant::now();
         let n = sys.particles.len();
         let ia = self.params.gradient == GradientOperator::IntegralApproximation;

@@ -24,7 +24,7 @@ pub mod recovery;
 
 use super::triggers;
 use super::{
-    density_and_pressure, first_step_from, first_step_state, gradients, pair_gradient,
+    density_and_pressure, first_step_from, first_step_state, ia_matrices, pair_gradient,
     GradientOperator, Preset, RosswogOverrides, RosswogParams, SignalVelocity, TriggerLevels,
     APPROACH_TOLERANCE,
 };
@@ -261,11 +261,7 @@ impl<const D: usize> Scheme<D> for RosswogSr {
             p.extra_scalars[slots.energy][i] = c.eps;
             p.extra_scalars[slots.lorentz][i] = c.lorentz;
         }
-        let k0 = if self.params.triggers && self.params.k_constant_until <= 0.0 {
-            self.params.k_min
-        } else {
-            self.params.k_constant
-        };
+        let k0 = self.params.initial_k();
         p.alpha.iter_mut().for_each(|a| *a = k0);
     }
 
@@ -277,11 +273,7 @@ impl<const D: usize> Scheme<D> for RosswogSr {
         let xw = density_and_pressure(sys, &self.params, self.first_step, &mut |s| {
             recover_all(s, slots, g)
         })?;
-        let t0 = std::time::Instant::now();
-        let (mats, _grads, fallbacks) = gradients::ia_pass(sys);
-        sys.stats.ia_fallbacks = fallbacks;
-        sys.stats.ia_fallbacks_total += fallbacks;
-        sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
+        let mats = ia_matrices(sys);
         let t0 = std::time::Instant::now();
         let n = sys.particles.len();
         let ia = self.params.gradient == GradientOperator::IntegralApproximation;
