@@ -213,10 +213,8 @@ impl RosswogOverrides {
 pub struct Rosswog {
     pub params: RosswogParams,
     preset: Preset,
-    /// Slot holding ∇·v of the previous full step (shock trigger).
-    prev_div_slot: usize,
-    first_step: bool,
-    levels: Option<TriggerLevels>,
+    /// The triggers' carried state (previous ∇·v, first step, levels).
+    trig: triggers::TriggerState,
 }
 
 /// The largest dissipation parameter and trigger targets over the particles after a step
@@ -242,15 +240,13 @@ impl Rosswog {
         Self {
             params,
             preset,
-            prev_div_slot: usize::MAX,
-            first_step: true,
-            levels: None,
+            trig: triggers::TriggerState::new(),
         }
     }
 
     /// Density, h and pressure (Newtonian: P from the EOS), see [`density_and_pressure`].
     fn density<const D: usize>(&self, sys: &mut System<D>) -> Vec<f64> {
-        density_and_pressure(sys, &self.params, self.first_step, &mut |s| {
+        density_and_pressure(sys, &self.params, self.trig.first_step, &mut |s| {
             s.update_eos();
             Ok(())
         })
@@ -369,20 +365,6 @@ pub(crate) fn ia_matrices<const D: usize>(sys: &mut System<D>) -> Vec<gradients:
     mats
 }
 
-/// The state the Rosswog schemes carry between steps: whether the triggers have seen a step
-/// (their first step has no previous ∇·v), as one 0/1 value.
-pub(crate) fn first_step_state(first_step: bool) -> Vec<f64> {
-    vec![if first_step { 1.0 } else { 0.0 }]
-}
-
-/// The flag of [`first_step_state`] back from a saved state of scheme `name`.
-pub(crate) fn first_step_from(name: &str, state: &[f64]) -> Result<bool, String> {
-    match state {
-        [f] if *f == 0.0 || *f == 1.0 => Ok(*f == 1.0),
-        _ => Err(format!("{name}: expected one 0/1 flag, got {state:?}")),
-    }
-}
-
 /// g_a (or g_b) of the pair (a, b), standing in for ∇_a W (Eqs. 66/67) with particle i's
 /// smoothing length h: IA, C_i (r_b − r_a) W(h), or, on fallback and in the kernel
 /// formulations, dW/dr · r̂_ab. `dx` = r_a − r_b; a mirror image (`code` ≠ 0) carries the
@@ -460,7 +442,7 @@ impl<const D: usize> Scheme<D> for Rosswog {
     fn init(&mut self, sys: &mut System<D>) {
         // wall particles need full neighbourhoods for their IA matrices (Eq. 17)
         sys.wall_pairs = true;
-        self.prev_div_slot = sys.particles.add_scalar_field(0.0);
+        self.trig.register(sys);
         // Pressures of the initial condition seed X = P^k.
         sys.update_eos();
         let k0 = self.params.initial_k();
@@ -558,30 +540,20 @@ impl<const D: usize> Scheme<D> for Rosswog {
     }
 
     fn end_step(&mut self, sys: &mut System<D>, dt: f64) {
-        if self.params.triggers {
-            self.levels = Some(triggers::update(
-                sys,
-                &self.params,
-                self.prev_div_slot,
-                dt,
-                self.first_step,
-                None,
-            ));
-        }
-        self.first_step = false;
+        self.trig.end_step(sys, &self.params, dt, None);
     }
 
     fn trigger_levels(&self) -> Option<TriggerLevels> {
-        self.levels
+        self.trig.levels
     }
 
     /// Whether the trigger has seen a step yet (its first step has no previous ∇·v).
     fn carried_state(&self) -> Vec<f64> {
-        first_step_state(self.first_step)
+        self.trig.carried()
     }
 
     fn set_carried_state(&mut self, state: &[f64]) -> Result<(), String> {
-        self.first_step = first_step_from(<Self as Scheme<D>>::name(self), state)?;
-        Ok(())
+        self.trig
+            .set_carried(<Self as Scheme<D>>::name(self), state)
     }
 }

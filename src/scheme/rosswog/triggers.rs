@@ -11,6 +11,74 @@ use super::{RosswogParams, TriggerLevels};
 use crate::system::System;
 use rayon::prelude::*;
 
+/// What the triggers carry from step to step for a Rosswog scheme (Newtonian or SR): the slot
+/// of the previous ∇·v, whether a step has been seen yet (the first has no previous ∇·v) and
+/// the levels of the latest update.
+#[derive(Debug, Clone, Copy)]
+pub struct TriggerState {
+    prev_div_slot: usize,
+    pub first_step: bool,
+    pub levels: Option<TriggerLevels>,
+}
+
+impl TriggerState {
+    pub fn new() -> Self {
+        Self {
+            prev_div_slot: usize::MAX,
+            first_step: true,
+            levels: None,
+        }
+    }
+
+    /// Register the previous-∇·v slot (at the scheme's `init`).
+    pub fn register<const D: usize>(&mut self, sys: &mut System<D>) {
+        self.prev_div_slot = sys.particles.add_scalar_field(0.0);
+    }
+
+    /// After a step: update K when the triggers run (`lorentz`: the γ_b weights of SR runs).
+    pub fn end_step<const D: usize>(
+        &mut self,
+        sys: &mut System<D>,
+        prm: &RosswogParams,
+        dt: f64,
+        lorentz: Option<&[f64]>,
+    ) {
+        if prm.triggers {
+            self.levels = Some(update(
+                sys,
+                prm,
+                self.prev_div_slot,
+                dt,
+                self.first_step,
+                lorentz,
+            ));
+        }
+        self.first_step = false;
+    }
+
+    /// The carried state as one 0/1 value (whether the first step is still to come).
+    pub fn carried(&self) -> Vec<f64> {
+        vec![if self.first_step { 1.0 } else { 0.0 }]
+    }
+
+    /// Put back what [`Self::carried`] returned, for scheme `name`.
+    pub fn set_carried(&mut self, name: &str, state: &[f64]) -> Result<(), String> {
+        match state {
+            [f] if *f == 0.0 || *f == 1.0 => {
+                self.first_step = *f == 1.0;
+                Ok(())
+            }
+            _ => Err(format!("{name}: expected one 0/1 flag, got {state:?}")),
+        }
+    }
+}
+
+impl Default for TriggerState {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 #[derive(Clone, Copy, Default)]
 struct NoiseSums {
     s1: f64,

@@ -24,9 +24,8 @@ pub mod recovery;
 
 use super::triggers;
 use super::{
-    density_and_pressure, first_step_from, first_step_state, ia_matrices, pair_gradient,
-    GradientOperator, Preset, RosswogOverrides, RosswogParams, SignalVelocity, TriggerLevels,
-    APPROACH_TOLERANCE,
+    density_and_pressure, ia_matrices, pair_gradient, GradientOperator, Preset, RosswogOverrides,
+    RosswogParams, SignalVelocity, TriggerLevels, APPROACH_TOLERANCE,
 };
 use crate::particles::Vector;
 use crate::scheme::{Scheme, SchemeError};
@@ -58,9 +57,8 @@ pub fn validate_overrides(preset: Preset, o: &RosswogOverrides) -> Result<(), St
 pub struct RosswogSr {
     pub params: RosswogParams,
     preset: Preset,
-    prev_div_slot: usize,
-    first_step: bool,
-    levels: Option<TriggerLevels>,
+    /// The triggers' carried state (previous ∇·v, first step, levels).
+    trig: triggers::TriggerState,
     slots: SrSlots,
     /// Γ of P = (Γ − 1) n u (Eq. 62).
     gamma_eos: f64,
@@ -77,9 +75,7 @@ impl RosswogSr {
                 ..params
             },
             preset,
-            prev_div_slot: usize::MAX,
-            first_step: true,
-            levels: None,
+            trig: triggers::TriggerState::new(),
             slots: SrSlots {
                 momentum: usize::MAX,
                 energy: usize::MAX,
@@ -232,7 +228,7 @@ impl<const D: usize> Scheme<D> for RosswogSr {
             self.gamma_eos = gamma;
         }
         let g = self.gamma_eos;
-        self.prev_div_slot = sys.particles.add_scalar_field(0.0);
+        self.trig.register(sys);
         let slots = SrSlots {
             momentum: sys.particles.add_vector_field(),
             energy: sys.particles.add_scalar_field(0.0),
@@ -270,7 +266,7 @@ impl<const D: usize> Scheme<D> for RosswogSr {
             return Err(SchemeError(e.clone()));
         }
         let (slots, g) = (self.slots, self.gamma_eos);
-        let xw = density_and_pressure(sys, &self.params, self.first_step, &mut |s| {
+        let xw = density_and_pressure(sys, &self.params, self.trig.first_step, &mut |s| {
             recover_all(s, slots, g)
         })?;
         let mats = ia_matrices(sys);
@@ -350,36 +346,26 @@ impl<const D: usize> Scheme<D> for RosswogSr {
     fn refresh(&mut self, sys: &mut System<D>) {
         let (slots, g) = (self.slots, self.gamma_eos);
         // a refresh has no way to report; the next evaluation recovers again and reports
-        let _ = density_and_pressure(sys, &self.params, self.first_step, &mut |s| {
+        let _ = density_and_pressure(sys, &self.params, self.trig.first_step, &mut |s| {
             recover_all(s, slots, g)
         });
     }
 
     fn end_step(&mut self, sys: &mut System<D>, dt: f64) {
-        if self.params.triggers {
-            let lorentz = sys.particles.extra_scalars[self.slots.lorentz].clone();
-            self.levels = Some(triggers::update(
-                sys,
-                &self.params,
-                self.prev_div_slot,
-                dt,
-                self.first_step,
-                Some(&lorentz),
-            ));
-        }
-        self.first_step = false;
+        let lorentz = sys.particles.extra_scalars[self.slots.lorentz].clone();
+        self.trig.end_step(sys, &self.params, dt, Some(&lorentz));
     }
 
     fn trigger_levels(&self) -> Option<TriggerLevels> {
-        self.levels
+        self.trig.levels
     }
 
     fn carried_state(&self) -> Vec<f64> {
-        first_step_state(self.first_step)
+        self.trig.carried()
     }
 
     fn set_carried_state(&mut self, state: &[f64]) -> Result<(), String> {
-        self.first_step = first_step_from(<Self as Scheme<D>>::name(self), state)?;
-        Ok(())
+        self.trig
+            .set_carried(<Self as Scheme<D>>::name(self), state)
     }
 }
