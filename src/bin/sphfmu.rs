@@ -82,7 +82,8 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
         /// Run with this scheme preset instead of the case's (standard, rpsph, rosswog-f1..f4,
-        /// crksph, compsph, compsph-cullen, psph), with the preset's kernel and integrator
+        /// rosswog-sr-f1..f4, crksph, compsph, compsph-cullen, psph), with the preset's kernel and
+        /// integrator
         #[arg(long)]
         scheme: Option<String>,
         /// Change a key of the case file, e.g. --set time.t_end=0.1 --set 'region.*.spacing=0.005'
