@@ -14,7 +14,7 @@
 //! (gravity removed), the exact reaction of what the fluid receives, since every pair force
 //! is antisymmetric. Walls move only with their body's kinematics.
 
-use super::kinematics::{HeldPose, Motion, Pose};
+use super::kinematics::{from3, to3, HeldPose, Motion, Pose};
 use crate::neighbours::unpack;
 use crate::particles::Vector;
 use crate::system::System;
@@ -57,45 +57,33 @@ pub struct Body<const D: usize> {
 /// in the laminar viscous term.
 type WallState<const D: usize> = (f64, f64, f64, f64, Vector<D>);
 
-fn to3<const D: usize>(v: &Vector<D>) -> nalgebra::Vector3<f64> {
-    let mut o = nalgebra::Vector3::zeros();
-    for k in 0..D.min(3) {
-        o[k] = v[k];
-    }
-    o
-}
-
-fn from3<const D: usize>(v: &nalgebra::Vector3<f64>) -> Vector<D> {
-    Vector::<D>::from_fn(|k, _| v[k])
-}
-
 impl<const D: usize> Body<D> {
-    fn omega3(&self, w: f64) -> nalgebra::Vector3<f64> {
-        if D == 2 {
-            nalgebra::Vector3::new(0.0, 0.0, w)
-        } else {
-            self.axis * w
-        }
-    }
-
-    /// R(θ)·r for the body rotation (2D about z, 3D about `axis`).
-    fn rotate(&self, r: &Vector<D>, theta: f64) -> Vector<D> {
-        super::kinematics::rotate_about(&self.axis, r, theta)
+    /// The unit rotation axis of the body's prescribed motion (2D: z).
+    pub fn unit_axis(&self) -> nalgebra::Unit<nalgebra::Vector3<f64>> {
+        nalgebra::Unit::new_normalize(self.axis)
     }
 
     /// Position, velocity and acceleration of the body point that was at `rest` at t = 0.
     pub fn point(&self, rest: &Vector<D>) -> (Vector<D>, Vector<D>, Vector<D>) {
         let p = &self.pose;
-        let r = self.rotate(&(rest - self.reference), p.angle);
-        let (r3, w, al) = (
-            to3(&r),
-            self.omega3(p.angular_velocity),
-            self.omega3(p.angular_acceleration),
-        );
+        let r = p.to_world(&(rest - self.reference));
+        let (r3, w, al) = (to3(&r), p.angular_velocity, p.angular_acceleration);
         let x = self.reference + p.displacement + r;
         let v = p.velocity + from3::<D>(&w.cross(&r3));
         let a = p.acceleration + from3::<D>(&(al.cross(&r3) + w.cross(&w.cross(&r3))));
         (x, v, a)
+    }
+
+    /// The latest force and torque in the body's own axes (Rᵀ F, Rᵀ T): what a multibody
+    /// master applies to a body frame.
+    pub fn loads_in_body_frame(&self) -> (Vector<D>, nalgebra::Vector3<f64>) {
+        let t = nalgebra::Vector3::from(self.torque);
+        let t = if D < 2 {
+            t
+        } else {
+            self.pose.rotation.inverse_transform_vector(&t)
+        };
+        (self.pose.to_body(&self.force), t)
     }
 }
 
@@ -112,7 +100,7 @@ impl<const D: usize> System<D> {
         for b in &mut self.bodies {
             b.pose = match b.motion {
                 Motion::External => b.held.at(t),
-                _ => b.motion.pose::<D>(t),
+                _ => b.motion.pose::<D>(t, &b.unit_axis()),
             };
         }
         let bodies = &self.bodies;

@@ -1,18 +1,20 @@
 //! The body-fixed (non-inertial) frame of a case (issue 5, `[frame]`): instead of moving a
 //! tank's walls through the box, the whole computation stays in the tank's frame, which moves
-//! with a prescribed motion (translation d(t) of its reference point, rotation θ(t) about
-//! `axis`, 2D: about z). Every particle then feels, besides the inertial gravity g, the
+//! with a prescribed motion (translation d(t) of its reference point and a rotation R(t),
+//! `boundary::kinematics`). Every particle then feels, besides the inertial gravity g, the
 //! fictitious accelerations of a frame with origin acceleration A = d̈ and angular velocity
-//! Ω = θ̇ k (e.g. Landau & Lifshitz, Mechanics §39):
+//! Ω (e.g. Landau & Lifshitz, Mechanics §39):
 //!
 //!   a = −∇P/ρ + Rᵀ(g − A) − Ω̇ × r − 2 Ω × v − Ω × (Ω × r),
 //!
-//! with r = x − reference and v the velocity in the frame, and Rᵀ turning inertial vectors
-//! into frame coordinates. Positions, velocities, forces and torques on bodies are all
+//! with r = x − reference and v the velocity in the frame, Rᵀ turning inertial vectors into
+//! frame coordinates, and Ω = Rᵀω, Ω̇ = Rᵀω̇ the world angular velocity and acceleration in
+//! frame coordinates (d/dt (Rᵀω) = Rᵀω̇, since Ṙᵀω = −Rᵀ(ω × ω) = 0). The terms hold for
+//! any 3D pose; a prescribed motion turns about one axis, where Rᵀω = ω. Positions, velocities, forces and torques on bodies are all
 //! reported in frame coordinates. The wall condition's hydrostatic term (Adami et al. 2012,
 //! eq. 27) uses the same effective body force at the wall particle.
 
-use super::kinematics::{rotate_about, Motion, Pose};
+use super::kinematics::{from3, to3, Motion, Pose};
 use crate::particles::Vector;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -111,32 +113,30 @@ pub fn body_force_in<const D: usize>(
     }
 }
 
-fn to3<const D: usize>(v: &Vector<D>) -> Vector3<f64> {
-    Vector3::from_fn(|k, _| if k < D { v[k] } else { 0.0 })
-}
-
 impl<const D: usize> Frame<D> {
     /// The frame's pose at time t.
     pub fn place(&mut self, t: f64) {
-        self.pose = self.motion.pose::<D>(t);
+        self.pose = self
+            .motion
+            .pose::<D>(t, &nalgebra::Unit::new_normalize(self.axis));
     }
 
     /// The uniform part of the body force in frame coordinates, Rᵀ(g − A).
     pub fn uniform(&self, g: &Vector<D>) -> Vector<D> {
-        rotate_about(&self.axis, &(g - self.pose.acceleration), -self.pose.angle)
+        self.pose.to_body(&(g - self.pose.acceleration))
     }
 
     /// Body force per unit mass at frame position x moving at frame velocity v: the uniform
     /// part and the Euler, Coriolis and centrifugal terms (module docs).
     pub fn body_force(&self, uniform: &Vector<D>, x: &Vector<D>, v: &Vector<D>) -> Vector<D> {
         let p = &self.pose;
-        if p.angular_velocity == 0.0 && p.angular_acceleration == 0.0 {
+        if p.angular_velocity == Vector3::zeros() && p.angular_acceleration == Vector3::zeros() {
             return *uniform;
         }
         let r = to3(&(x - self.reference));
-        let w = self.axis * p.angular_velocity;
-        let wdot = self.axis * p.angular_acceleration;
+        let w = p.rotation.inverse_transform_vector(&p.angular_velocity);
+        let wdot = p.rotation.inverse_transform_vector(&p.angular_acceleration);
         let f = -wdot.cross(&r) - 2.0 * w.cross(&to3(v)) - w.cross(&w.cross(&r));
-        uniform + Vector::<D>::from_fn(|k, _| f[k])
+        uniform + from3::<D>(&f)
     }
 }

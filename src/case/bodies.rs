@@ -29,6 +29,20 @@ pub struct BodyConfig {
     /// viscous term leaves the wall out).
     #[serde(default)]
     pub no_slip: bool,
+    /// How a master gives the orientation of a 3D body driven from outside (FMU inputs):
+    /// "quaternion" (default, `<name>.orientation`, [w, x, y, z]) or "matrix"
+    /// (`<name>.T`, Modelica MultiBody's `R.T`, row major). A 2D body takes an angle.
+    #[serde(default)]
+    pub orientation: OrientationInput,
+}
+
+/// `orientation` of a `[[body]]`: the form of the FMU's orientation input.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum OrientationInput {
+    #[default]
+    Quaternion,
+    Matrix,
 }
 
 impl BodyConfig {
@@ -60,6 +74,15 @@ impl BodyConfig {
                     )));
                 }
             }
+        }
+        if self.orientation != OrientationInput::Quaternion
+            && !(d == 3 && self.motion == Motion::External)
+        {
+            return Err(CaseError(format!(
+                "{key}.orientation: \"matrix\" is for a 3D body with motion = {{ type = \"external\" }} (a {d}D body{} takes its orientation as {})",
+                if self.motion == Motion::External { "" } else { " with a prescribed motion" },
+                if d == 3 { "its motion" } else { "an angle" }
+            )));
         }
         if case.bodies[..i].iter().any(|b| b.name == self.name) {
             return Err(CaseError(format!(

@@ -1,7 +1,7 @@
 //! Case files (`models/*.toml`): a scenario as data. Parsed with serde (unknown keys are
 //! errors), then validated range by range; every error names the key and the allowed range.
 
-mod bodies;
+pub mod bodies;
 mod checks;
 mod estimate;
 pub mod fields;

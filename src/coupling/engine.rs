@@ -106,9 +106,9 @@ impl<const D: usize> Engine for Coupled<D> {
         let p = &body.pose;
         BodyKinematics {
             position: array(&(body.reference + p.displacement)),
-            angle: p.angle,
+            orientation: super::orientation::to_array(&p.rotation),
             velocity: array(&p.velocity),
-            angular_velocity: p.angular_velocity,
+            angular_velocity: p.angular_velocity.into(),
         }
     }
 
@@ -120,8 +120,12 @@ impl<const D: usize> Engine for Coupled<D> {
             pose: Pose {
                 displacement: vector::<D>(&k.position) - body.reference,
                 velocity: vector::<D>(&k.velocity),
-                angle: k.angle,
-                angular_velocity: k.angular_velocity,
+                // checked by Coupling::check_body_kinematics: within 1e-6 of unit length
+                rotation: super::orientation::to_unit(
+                    &super::orientation::unit_quaternion("orientation", &k.orientation)
+                        .expect("checked"),
+                ),
+                angular_velocity: k.angular_velocity.into(),
                 ..Pose::default()
             },
         };
@@ -173,9 +177,14 @@ impl<const D: usize> Engine for Coupled<D> {
             .sys
             .bodies
             .iter()
-            .map(|b| BodyLoads {
-                force: array(&b.force),
-                torque: b.torque,
+            .map(|b| {
+                let (force_body, torque_body) = b.loads_in_body_frame();
+                BodyLoads {
+                    force: array(&b.force),
+                    torque: b.torque,
+                    force_body: array(&force_body),
+                    torque_body: torque_body.into(),
+                }
             })
             .collect()
     }

@@ -195,19 +195,19 @@ pub(super) fn check<const D: usize>(s: &Saved<D>, c: &Coupled<D>) -> Result<(), 
                 .iter()
                 .chain(&p.velocity)
                 .chain(&p.acceleration)
-                .chain([&p.angle, &p.angular_velocity, &p.angular_acceleration])
+                .chain(p.rotation.coords.iter())
+                .chain(&p.angular_velocity)
+                .chain(&p.angular_acceleration)
                 .chain(
                     h.displacement
                         .iter()
                         .chain(&h.velocity)
                         .chain(&h.acceleration),
                 )
-                .chain([
-                    &h.angle,
-                    &h.angular_velocity,
-                    &h.angular_acceleration,
-                    &b.held.time,
-                ]),
+                .chain(h.rotation.coords.iter())
+                .chain(&h.angular_velocity)
+                .chain(&h.angular_acceleration)
+                .chain([&b.held.time]),
         )?;
         all_finite(
             &format!("{what} loads"),
@@ -219,11 +219,13 @@ pub(super) fn check<const D: usize>(s: &Saved<D>, c: &Coupled<D>) -> Result<(), 
                 .chain(&b.angular_impulse),
         )?;
         if (b.axis.norm() - 1.0).abs() > 1e-9
+            || (b.pose.rotation.norm() - 1.0).abs() > 1e-9
+            || (b.held.pose.rotation.norm() - 1.0).abs() > 1e-9
             || !(b.particle_volume.is_finite() && b.particle_volume > 0.0)
             || !(b.spacing.is_finite() && b.spacing > 0.0)
         {
             return Err(format!(
-                "{what}: axis not a unit vector, or wall volume or spacing not > 0"
+                "{what}: axis or orientation not of unit length, or wall volume or spacing not > 0"
             ));
         }
     }

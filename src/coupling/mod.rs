@@ -15,6 +15,7 @@
 
 mod engine;
 mod integrity;
+pub mod orientation;
 pub mod sampling;
 pub mod state;
 mod stepping;
@@ -115,23 +116,46 @@ impl CouplingOptions {
 }
 
 /// Pose and velocities of an externally driven body (`motion = { type = "external" }`):
-/// the position of its reference point, the rotation angle about its axis (2D: about z), and
-/// the velocities it moves on with until the next update. Entries beyond the case's
-/// dimension must be 0.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+/// the position of its reference point, its orientation (a unit quaternion [w, x, y, z] that
+/// turns body offsets into world offsets, `orientation`; 2D: a rotation about z, 1D: the
+/// identity), and the velocity and world angular velocity it moves on with until the next
+/// update. Entries beyond the case's dimension must be 0 (2D: ω about z only).
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BodyKinematics {
     pub position: [f64; 3],
-    pub angle: f64,
+    pub orientation: [f64; 4],
     pub velocity: [f64; 3],
-    pub angular_velocity: f64,
+    pub angular_velocity: [f64; 3],
+}
+
+impl Default for BodyKinematics {
+    fn default() -> Self {
+        Self {
+            position: [0.0; 3],
+            orientation: orientation::IDENTITY,
+            velocity: [0.0; 3],
+            angular_velocity: [0.0; 3],
+        }
+    }
+}
+
+impl BodyKinematics {
+    /// A 2D body's angle and angular velocity about z.
+    pub fn set_planar(&mut self, angle: f64, angular_velocity: f64) {
+        self.orientation = orientation::planar(angle);
+        self.angular_velocity = [0.0, 0.0, angular_velocity];
+    }
 }
 
 /// Force and torque of the fluid on one body (torque about its moved reference point; 2D:
-/// only z), from the latest evaluation.
+/// only z), from the latest evaluation, in world axes and in the body's own axes (Rᵀ F, Rᵀ T,
+/// with R the body's orientation).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct BodyLoads {
     pub force: [f64; 3],
     pub torque: [f64; 3],
+    pub force_body: [f64; 3],
+    pub torque_body: [f64; 3],
 }
 
 /// Fluid state at a probe, Shepard-interpolated: `coverage` = Σ_f V_f W(x − x_f, h_f) is
@@ -348,17 +372,27 @@ impl Coupling {
         let key = |f: &str| format!("body {:?} {f}", cfg.name);
         check_vector(&key("position"), &k.position, d)?;
         check_vector(&key("velocity"), &k.velocity, d)?;
-        for (f, v) in [("angle", k.angle), ("angular_velocity", k.angular_velocity)] {
-            if !v.is_finite() {
+        let q = orientation::unit_quaternion(&key("orientation"), &k.orientation)
+            .map_err(CouplingError)?;
+        let w = &k.angular_velocity;
+        if let Some(x) = w.iter().find(|x| !x.is_finite()) {
+            return Err(CouplingError(format!(
+                "{}: entries must be finite, got {x}",
+                key("angular_velocity")
+            )));
+        }
+        // a 2D body turns about z only, a 1D body not at all
+        let (turns, about) = match d {
+            1 => (&[][..], "does not rotate in a 1D case"),
+            2 => (&[2][..], "turns about z only in a 2D case"),
+            _ => (&[0, 1, 2][..], ""),
+        };
+        for c in 0..3 {
+            if !turns.contains(&c) && (w[c] != 0.0 || q[c + 1] != 0.0) {
                 return Err(CouplingError(format!(
-                    "{}: must be finite, got {v}",
-                    key(f)
-                )));
-            }
-            if d == 1 && v != 0.0 {
-                return Err(CouplingError(format!(
-                    "{}: must be 0 in a 1D case, got {v}",
-                    key(f)
+                    "{}: the body {about}: angular velocity {w:?} and quaternion [w, x, y, z] {q:?} must have 0 in {}",
+                    key("orientation / angular_velocity"),
+                    ["x", "y", "z"][c]
                 )));
             }
         }

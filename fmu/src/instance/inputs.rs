@@ -2,13 +2,93 @@
 //! next doStep) and the FMU state snapshots that carry them with the solver's bytes.
 
 use crate::table::{Binding, Causality, Start, Table};
-use sphfmu::coupling::BodyKinematics;
+use sphfmu::coupling::{orientation, BodyKinematics};
+
+/// The inputs of one externally driven body as the master set them. Its orientation is in
+/// one of three forms, fixed by the case (a 2D or 1D body's `angle`; a 3D body's
+/// `orientation` quaternion or Modelica `T` matrix); the others keep their start values.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct BodyInputs {
+    pub position: [f64; 3],
+    pub velocity: [f64; 3],
+    pub angle: f64,
+    pub quaternion: [f64; 4],
+    pub matrix_t: [f64; 9],
+    /// World axes; a 2D body's scalar input is the z entry.
+    pub angular_velocity: [f64; 3],
+}
+
+impl Default for BodyInputs {
+    fn default() -> Self {
+        Self {
+            position: [0.0; 3],
+            velocity: [0.0; 3],
+            angle: 0.0,
+            quaternion: orientation::IDENTITY,
+            matrix_t: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+            angular_velocity: [0.0; 3],
+        }
+    }
+}
+
+/// Which of a body's orientation inputs the table has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OrientationForm {
+    Angle,
+    Quaternion,
+    Matrix,
+}
+
+impl BodyInputs {
+    /// The solver's kinematics, or why the orientation is not a rotation (`name` is the
+    /// body's name, for the message).
+    pub fn kinematics(&self, name: &str, form: OrientationForm) -> Result<BodyKinematics, String> {
+        let orientation = match form {
+            OrientationForm::Angle => orientation::planar(self.angle),
+            OrientationForm::Quaternion => {
+                orientation::unit_quaternion(&format!("{name}.orientation"), &self.quaternion)?
+            }
+            OrientationForm::Matrix => {
+                orientation::from_matrix_t(&format!("{name}.T"), &self.matrix_t)?
+            }
+        };
+        Ok(BodyKinematics {
+            position: self.position,
+            orientation,
+            velocity: self.velocity,
+            angular_velocity: self.angular_velocity,
+        })
+    }
+
+    fn numbers(&self) -> impl Iterator<Item = &f64> {
+        self.position
+            .iter()
+            .chain(&self.velocity)
+            .chain([&self.angle])
+            .chain(&self.quaternion)
+            .chain(&self.matrix_t)
+            .chain(&self.angular_velocity)
+    }
+
+    fn numbers_mut(&mut self) -> impl Iterator<Item = &mut f64> {
+        self.position
+            .iter_mut()
+            .chain(&mut self.velocity)
+            .chain([&mut self.angle])
+            .chain(&mut self.quaternion)
+            .chain(&mut self.matrix_t)
+            .chain(&mut self.angular_velocity)
+    }
+}
+
+/// Numbers per body in a serialized state (3 + 3 + 1 + 4 + 9 + 3).
+const BODY_NUMBERS: usize = 23;
 
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Inputs {
     pub gravity: [f64; 3],
     /// Per externally driven body (order of `Table::external_bodies`).
-    pub bodies: Vec<BodyKinematics>,
+    pub bodies: Vec<BodyInputs>,
     /// Per port with an external pressure (order of `Table::external_ports`).
     pub ports: Vec<f64>,
 }
@@ -24,7 +104,7 @@ pub struct Snapshot {
 pub(crate) fn start_inputs(table: &Table) -> Inputs {
     let mut inputs = Inputs {
         gravity: [0.0; 3],
-        bodies: vec![BodyKinematics::default(); table.external_bodies.len()],
+        bodies: vec![BodyInputs::default(); table.external_bodies.len()],
         ports: vec![0.0; table.external_ports.len()],
     };
     for v in &table.variables {
@@ -47,10 +127,11 @@ pub(crate) fn start_inputs(table: &Table) -> Inputs {
 /// The serialized FMU state's envelope (`sphfmu::coupling::state::seal`): magic bytes and
 /// format version; the CRC-32 covers the inputs and the solver's own (sealed) bytes alike.
 const MAGIC: [u8; 8] = *b"sphfmuFS";
-const VERSION: u32 = 1;
+/// 2: a body carries its angle, quaternion, matrix and 3-vector angular velocity (issue 22).
+const VERSION: u32 = 2;
 
 impl Snapshot {
-    /// Sealed bytes: gravity, start time, the body count and 8 numbers per body, the port
+    /// Sealed bytes: gravity, start time, the body count and 23 numbers per body, the port
     /// count and one pressure per port (f64 little endian), then the solver's state.
     pub fn serialize(&self) -> Vec<u8> {
         let mut out = Vec::new();
@@ -59,9 +140,7 @@ impl Snapshot {
         put(self.start_time);
         put(self.inputs.bodies.len() as f64);
         for b in &self.inputs.bodies {
-            b.position.iter().chain(&b.velocity).for_each(|x| put(*x));
-            put(b.angle);
-            put(b.angular_velocity);
+            b.numbers().for_each(|x| put(*x));
         }
         put(self.inputs.ports.len() as f64);
         self.inputs.ports.iter().for_each(|x| put(*x));
@@ -97,17 +176,15 @@ impl Snapshot {
         let n = count(get()?, "body")?;
         let mut bodies = vec![];
         for _ in 0..n {
-            let mut k = BodyKinematics::default();
-            for x in k.position.iter_mut().chain(k.velocity.iter_mut()) {
+            let mut k = BodyInputs::default();
+            for x in k.numbers_mut() {
                 *x = get()?;
             }
-            k.angle = get()?;
-            k.angular_velocity = get()?;
             bodies.push(k);
         }
         let m = count(get()?, "port")?;
         let ports = (0..m).map(|_| get()).collect::<Result<Vec<_>, _>>()?;
-        let used = 8 * (6 + 8 * n + m);
+        let used = 8 * (6 + BODY_NUMBERS * n + m);
         Ok(Snapshot {
             inputs: Inputs {
                 gravity,

@@ -273,13 +273,41 @@ impl Instance {
         Ok(())
     }
 
-    /// Hand the inputs to the solver (it ignores unchanged values).
+    /// The solver's kinematics of every externally driven body from `inputs`, each checked
+    /// as [`Coupling::set_body_kinematics`] would, or the first reason one is refused.
+    fn body_kinematics(
+        &self,
+        c: &Coupling,
+        inputs: &Inputs,
+    ) -> Result<Vec<sphfmu::coupling::BodyKinematics>, String> {
+        let mut out = vec![];
+        for (k, &b) in self.table.external_bodies.iter().enumerate() {
+            let (name, form) = &self.table.external_forms[k];
+            let kin = inputs.bodies[k].kinematics(name, *form)?;
+            c.check_body_kinematics(b, &kin).map_err(|e| e.0)?;
+            out.push(kin);
+        }
+        Ok(out)
+    }
+
+    /// Hand the inputs to the solver (it ignores unchanged values). Every input is checked
+    /// before any is handed on, so a refused one changes nothing.
     pub(crate) fn apply_inputs(&mut self) -> CallResult<()> {
+        let c = self.coupling.get().expect("coupling built");
+        c.check_gravity(&self.inputs.gravity)
+            .map_err(|e| (Status::Error, e.0))?;
+        let bodies = self
+            .body_kinematics(c, &self.inputs)
+            .map_err(|e| (Status::Error, e))?;
+        for (k, &p) in self.table.external_ports.iter().enumerate() {
+            c.check_port_pressure(p, self.inputs.ports[k])
+                .map_err(|e| (Status::Error, e.0))?;
+        }
         let c = self.coupling.get_mut().expect("coupling built");
         c.set_gravity(self.inputs.gravity)
             .map_err(|e| (Status::Error, e.0))?;
         for (k, &b) in self.table.external_bodies.iter().enumerate() {
-            c.set_body_kinematics(b, &self.inputs.bodies[k])
+            c.set_body_kinematics(b, &bodies[k])
                 .map_err(|e| (Status::Error, e.0))?;
         }
         for (k, &p) in self.table.external_ports.iter().enumerate() {
@@ -467,7 +495,7 @@ impl Instance {
                 "setFMUState: the state belongs to another model (body or port inputs differ)",
             );
         }
-        let c = self.coupling.get_mut().expect("built above");
+        let c = self.coupling.get().expect("built above");
         // the inputs the state carries pass the checks a master's set would
         let bad = |e: sphfmu::coupling::CouplingError| {
             (
@@ -482,13 +510,12 @@ impl Instance {
             ));
         }
         c.check_gravity(&s.inputs.gravity).map_err(bad)?;
-        for (k, &b) in self.table.external_bodies.iter().enumerate() {
-            c.check_body_kinematics(b, &s.inputs.bodies[k])
-                .map_err(bad)?;
-        }
+        self.body_kinematics(c, &s.inputs)
+            .map_err(|e| bad(sphfmu::coupling::CouplingError(e)))?;
         for (k, &p) in self.table.external_ports.iter().enumerate() {
             c.check_port_pressure(p, s.inputs.ports[k]).map_err(bad)?;
         }
+        let c = self.coupling.get_mut().expect("built above");
         c.restore(&s.solver)
             .map_err(|e| (Status::Error, format!("setFMUState: {}", e.0)))?;
         self.inputs = s.inputs.clone();

@@ -48,7 +48,7 @@ impl Instance {
         if let Some(x) = values.iter().find(|x| !x.is_finite()) {
             return err(format!("{name}: must be finite, got {x}"));
         }
-        let put = |dst: &mut [f64; 3]| dst[first..first + values.len()].copy_from_slice(values);
+        let put = |dst: &mut [f64]| dst[first..first + values.len()].copy_from_slice(values);
         let ext = |b: usize| self.table.external_index(b);
         match v.binding {
             Binding::Param(Param::Resolution) => {
@@ -103,8 +103,28 @@ impl Instance {
             Binding::BodyPosition(b) => put(&mut self.inputs.bodies[ext(b)].position),
             Binding::BodyVelocity(b) => put(&mut self.inputs.bodies[ext(b)].velocity),
             Binding::BodyAngle(b) => self.inputs.bodies[ext(b)].angle = values[0],
+            Binding::BodyQuaternion(b) | Binding::BodyMatrix(b) => {
+                let e = ext(b);
+                let mut body = self.inputs.bodies[e];
+                let quaternion = matches!(v.binding, Binding::BodyQuaternion(_));
+                if quaternion {
+                    put(&mut body.quaternion);
+                } else {
+                    put(&mut body.matrix_t);
+                }
+                // a whole orientation is checked now; one set element by element (FMI 2.0
+                // scalars) is checked as a whole by the next doStep
+                if values.len() == v.size {
+                    let (name, form) = &self.table.external_forms[e];
+                    body.kinematics(name, *form).map_err(|m| (Status::Error, m))?;
+                }
+                self.inputs.bodies[e] = body;
+            }
             Binding::BodyAngularVelocity(b) => {
-                self.inputs.bodies[ext(b)].angular_velocity = values[0]
+                // a 2D body's scalar input is the z entry
+                let first = if v.size == 1 { 2 } else { first };
+                let w = &mut self.inputs.bodies[ext(b)].angular_velocity;
+                w[first..first + values.len()].copy_from_slice(values);
             }
             Binding::PortPressure(k) => {
                 let p = values[0];
@@ -184,7 +204,16 @@ impl Instance {
             Binding::BodyPosition(b) => self.inputs.bodies[ext(b)].position.to_vec(),
             Binding::BodyVelocity(b) => self.inputs.bodies[ext(b)].velocity.to_vec(),
             Binding::BodyAngle(b) => vec![self.inputs.bodies[ext(b)].angle],
-            Binding::BodyAngularVelocity(b) => vec![self.inputs.bodies[ext(b)].angular_velocity],
+            Binding::BodyQuaternion(b) => self.inputs.bodies[ext(b)].quaternion.to_vec(),
+            Binding::BodyMatrix(b) => self.inputs.bodies[ext(b)].matrix_t.to_vec(),
+            Binding::BodyAngularVelocity(b) => {
+                let w = self.inputs.bodies[ext(b)].angular_velocity;
+                if v.size == 1 {
+                    vec![w[2]]
+                } else {
+                    w.to_vec()
+                }
+            }
             Binding::PortPressure(k) => vec![self.inputs.ports[self.table.external_port_index(k)]],
             _ => {
                 if v.causality != Causality::Output {
@@ -212,6 +241,8 @@ impl Instance {
         Ok(match b {
             Binding::BodyForce(k) => c.loads()[k].force.to_vec(),
             Binding::BodyTorque(k) => c.loads()[k].torque.to_vec(),
+            Binding::BodyForceBody(k) => c.loads()[k].force_body.to_vec(),
+            Binding::BodyTorqueBody(k) => c.loads()[k].torque_body.to_vec(),
             Binding::ProbeDensity(k) => vec![c.probes()[k].density],
             Binding::ProbePressure(k) => vec![c.probes()[k].pressure],
             Binding::ProbeVelocity(k) => c.probes()[k].velocity.to_vec(),

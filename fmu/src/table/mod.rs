@@ -51,10 +51,14 @@ pub enum Binding {
     Gravity,
     BodyPosition(usize),
     BodyAngle(usize),
+    BodyQuaternion(usize),
+    BodyMatrix(usize),
     BodyVelocity(usize),
     BodyAngularVelocity(usize),
     BodyForce(usize),
     BodyTorque(usize),
+    BodyForceBody(usize),
+    BodyTorqueBody(usize),
     ProbeDensity(usize),
     ProbePressure(usize),
     ProbeVelocity(usize),
@@ -118,7 +122,7 @@ pub struct Variable {
     pub vr: u32,
     pub kind: Kind,
     pub causality: Causality,
-    /// 1 or 3 (a 3-vector).
+    /// 1, or an array's length (3-vectors; 4 for a quaternion, 9 for a rotation matrix).
     pub size: usize,
     pub start: Start,
     pub unit: Option<&'static str>,
@@ -151,6 +155,8 @@ pub struct Table {
     pub dimension: usize,
     /// Bodies driven from outside (index into the case's bodies).
     pub external_bodies: Vec<usize>,
+    /// Their names and the form of their orientation input (same order).
+    pub external_forms: Vec<(String, crate::instance::inputs::OrientationForm)>,
     /// Ports whose pressure is set from outside (index into the case's ports).
     pub external_ports: Vec<usize>,
 }
@@ -190,7 +196,10 @@ impl Table {
                 c.case.dimension,
                 c.bodies
                     .iter()
-                    .map(|b| (b.name.clone(), b.motion == Motion::External))
+                    .map(|b| {
+                        let external = b.motion == Motion::External;
+                        (b.name.clone(), external, external.then_some(b.orientation))
+                    })
                     .collect::<Vec<_>>(),
                 c.probes.iter().map(|p| p.name.clone()).collect::<Vec<_>>(),
                 c.markers
@@ -213,7 +222,7 @@ impl Table {
         }
         if a.1 != b.1 {
             return Err(format!(
-                "bodies (name, driven from outside) {:?}; the FMU's variables are for {:?}",
+                "bodies (name, driven from outside, orientation input) {:?}; the FMU's variables are for {:?}",
                 b.1, a.1
             ));
         }

@@ -5,6 +5,8 @@ use super::*;
 use crate::table::units::units;
 use sphfmu::boundary::kinematics::Motion;
 use sphfmu::boundary::ports::PortPressure;
+use crate::instance::inputs::OrientationForm;
+use sphfmu::case::bodies::OrientationInput;
 
 fn pad3(v: &[f64]) -> Vec<f64> {
     (0..3).map(|k| v.get(k).copied().unwrap_or(0.0)).collect()
@@ -186,6 +188,7 @@ impl Table {
             format!("Uniform gravity (entries beyond the case's {d} dimensions must be 0), held between steps"),
             Binding::Gravity);
         let mut external_bodies = vec![];
+        let mut external_forms = vec![];
         for (i, b) in case.bodies.iter().enumerate() {
             if b.motion != Motion::External {
                 continue;
@@ -200,21 +203,48 @@ impl Table {
                 format!("Position of body {n}'s reference point"),
                 Binding::BodyPosition(i),
             );
-            v.input(
-                format!("{n}.angle"),
-                vec![0.0],
-                "rad",
-                format!("Rotation of body {n} about its axis (2D: about z)"),
-                Binding::BodyAngle(i),
-            );
+            let form = match (d, b.orientation) {
+                (1 | 2, _) => OrientationForm::Angle,
+                (_, OrientationInput::Quaternion) => OrientationForm::Quaternion,
+                (_, OrientationInput::Matrix) => OrientationForm::Matrix,
+            };
+            external_forms.push((n.clone(), form));
+            match form {
+                OrientationForm::Angle => v.input(
+                    format!("{n}.angle"),
+                    vec![0.0],
+                    "rad",
+                    format!("Rotation of body {n} about z"),
+                    Binding::BodyAngle(i),
+                ),
+                OrientationForm::Quaternion => v.input(
+                    format!("{n}.orientation"),
+                    sphfmu::coupling::orientation::IDENTITY.to_vec(),
+                    "1",
+                    format!("Orientation of body {n}: unit quaternion [w, x, y, z] turning body axes into world axes (renormalised within 1e-6 of unit length, refused beyond)"),
+                    Binding::BodyQuaternion(i),
+                ),
+                OrientationForm::Matrix => v.input(
+                    format!("{n}.T"),
+                    vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+                    "1",
+                    format!("Orientation of body {n} as Modelica MultiBody's R.T (row major; rows are the body axes in world coordinates, v_body = T v_world; orthonormal within 1e-6, det +1)"),
+                    Binding::BodyMatrix(i),
+                ),
+            }
             v.input(format!("{n}.velocity"), vec![0.0; 3], "m/s",
                 format!("Velocity of body {n}'s reference point (the body moves on with it until the next step)"),
                 Binding::BodyVelocity(i));
+            let (omega, about) = if d == 3 {
+                (vec![0.0; 3], "in world axes")
+            } else {
+                (vec![0.0], "about z")
+            };
             v.input(
                 format!("{n}.angular_velocity"),
-                vec![0.0],
+                omega,
                 "rad/s",
-                format!("Angular velocity of body {n} about its axis"),
+                format!("Angular velocity of body {n} {about}"),
                 Binding::BodyAngularVelocity(i),
             );
         }
@@ -235,6 +265,20 @@ impl Table {
                     "Torque of the fluid on body {n} about its moved reference point (2D: z only)"
                 ),
                 Binding::BodyTorque(i),
+            );
+            v.output(
+                format!("{n}.force_body"),
+                3,
+                Some(u.force),
+                format!("Force of the fluid on body {n} in the body's own axes"),
+                Binding::BodyForceBody(i),
+            );
+            v.output(
+                format!("{n}.torque_body"),
+                3,
+                Some(u.torque),
+                format!("Torque of the fluid on body {n} about its moved reference point, in the body's own axes"),
+                Binding::BodyTorqueBody(i),
             );
         }
         for (i, p) in case.probes.iter().enumerate() {
@@ -430,6 +474,7 @@ impl Table {
             fmi2,
             dimension: d,
             external_bodies,
+            external_forms,
             external_ports,
         }
     }

@@ -47,10 +47,11 @@ pub(crate) fn quantity(binding: &crate::table::Binding, dimension: usize) -> Opt
         B::Gravity => ("Acceleration", false),
         B::BodyPosition(_) => ("Length", false),
         B::BodyAngle(_) => ("Angle", false),
+        B::BodyQuaternion(_) | B::BodyMatrix(_) => ("Orientation", false),
         B::BodyVelocity(_) | B::ProbeVelocity(_) | B::Port(_, P::Velocity) => ("Velocity", false),
         B::BodyAngularVelocity(_) => ("AngularVelocity", false),
-        B::BodyForce(_) | B::PatchForce(_) => ("Force", true),
-        B::BodyTorque(_) => ("Torque", true),
+        B::BodyForce(_) | B::BodyForceBody(_) | B::PatchForce(_) => ("Force", true),
+        B::BodyTorque(_) | B::BodyTorqueBody(_) => ("Torque", true),
         B::ProbeDensity(_) => ("Density", false),
         B::ProbePressure(_)
         | B::Marker(_)
