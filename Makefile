@@ -19,7 +19,9 @@ build:
 # The FMUs: target/fmu/sphfmu.fmu (FMI 3.0) and sphfmu-fmi2.fmu (FMI 2.0) for the demo's
 # free piston, and the same pair for the hydrostatic tank under target/fmu/closed-tank2d/, the
 # channel between two pressure ports under target/fmu/channel-ports2d/ and the sloshing tank
-# under target/fmu/slosh2d/ (the tests use all four). `make fmu FMU_CASE=models/x.toml` also
+# under target/fmu/slosh2d/, and the 3D box driven in six degrees of freedom under
+# target/fmu/box3d/ (orientation as a quaternion) and target/fmu/box3d-matrix/ (as Modelica's
+# R.T) (the tests use them all). `make fmu FMU_CASE=models/x.toml` also
 # packages x under target/fmu/<its case name>/ and leaves the others alone. `cargo build
 # --workspace` also builds the zenoh node sphfmu-serve (`sphfmu serve`).
 DEMO_CASE := models/free-piston2d.toml
@@ -32,6 +34,8 @@ fmu:
 	$(PACKAGE) --case models/closed-tank2d.toml --out target/fmu/closed-tank2d
 	$(PACKAGE) --case models/channel-ports2d.toml --out target/fmu/channel-ports2d
 	$(PACKAGE) --case models/slosh2d.toml --out target/fmu/slosh2d
+	$(PACKAGE) --case models/box3d.toml --out target/fmu/box3d
+	$(PACKAGE) --case models/box3d.toml --set 'body.0.orientation="matrix"' --out target/fmu/box3d-matrix
 	$(if $(FMU_CASE),$(PACKAGE) --case $(FMU_CASE))
 
 # Main job: build the FMU and co-simulate a free piston on a gas spring with a Python master

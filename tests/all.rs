@@ -28,6 +28,7 @@ mod riemann;
 mod rosswog;
 mod rosswog_static;
 mod rpsph;
+mod six_dof;
 mod sod;
 mod sr;
 mod suite_small;

@@ -384,7 +384,10 @@ mod tests {
             assert!((v - b.velocity).norm() < 1e-6, "{m:?} v at {t}");
             assert!((acc - b.acceleration).norm() < 1e-5, "{m:?} a at {t}");
             assert!((w - b.angular_velocity).norm() < 1e-6, "{m:?} ω at {t}");
-            assert!((al - b.angular_acceleration).norm() < 1e-5, "{m:?} α at {t}");
+            assert!(
+                (al - b.angular_acceleration).norm() < 1e-5,
+                "{m:?} α at {t}"
+            );
         }
     }
 

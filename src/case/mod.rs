@@ -122,6 +122,12 @@ fn one_line(s: &str) -> String {
 }
 
 impl Case {
+    /// The case as TOML text that [`Self::parse`] reads back to the same case (how the FMU
+    /// packager stores a case changed by `--set`).
+    pub fn to_text(&self) -> Result<String, CaseError> {
+        toml::to_string(self).map_err(|e| CaseError(format!("cannot write the case: {e}")))
+    }
+
     /// Read and validate a case file.
     pub fn load(path: &Path) -> Result<Case, CaseError> {
         Self::load_with(path, None, &[])

@@ -116,15 +116,23 @@ mod tests {
     fn near_unit_is_renormalised_and_beyond_is_refused() {
         let q = unit_quaternion("q", &[1.0 + 5e-7, 0.0, 0.0, 0.0]).unwrap();
         assert_eq!(q, IDENTITY);
-        for bad in [[1.0 + 2e-6, 0.0, 0.0, 0.0], [0.0; 4], [f64::NAN, 0.0, 0.0, 1.0]] {
+        for bad in [
+            [1.0 + 2e-6, 0.0, 0.0, 0.0],
+            [0.0; 4],
+            [f64::NAN, 0.0, 0.0, 1.0],
+        ] {
             let e = unit_quaternion("tank.orientation", &bad).unwrap_err();
             assert!(e.starts_with("tank.orientation: "), "{e}");
         }
         let mut skew = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
         skew[1] = 1e-3;
-        assert!(from_matrix_t("m", &skew).unwrap_err().contains("orthonormal"));
+        assert!(from_matrix_t("m", &skew)
+            .unwrap_err()
+            .contains("orthonormal"));
         let mirror = [-1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
-        assert!(from_matrix_t("m", &mirror).unwrap_err().contains("reflection"));
+        assert!(from_matrix_t("m", &mirror)
+            .unwrap_err()
+            .contains("reflection"));
         assert_eq!(planar(0.0), IDENTITY);
     }
 }

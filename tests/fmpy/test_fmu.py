@@ -19,11 +19,13 @@ TANK3 = ROOT / "target" / "fmu" / "closed-tank2d" / "sphfmu.fmu"
 TANK2 = ROOT / "target" / "fmu" / "closed-tank2d" / "sphfmu-fmi2.fmu"
 CHANNEL3 = ROOT / "target" / "fmu" / "channel-ports2d" / "sphfmu.fmu"
 CHANNEL2 = ROOT / "target" / "fmu" / "channel-ports2d" / "sphfmu-fmi2.fmu"
+BOX3 = ROOT / "target" / "fmu" / "box3d-matrix" / "sphfmu.fmu"
+BOX2 = ROOT / "target" / "fmu" / "box3d" / "sphfmu-fmi2.fmu"
 
 
 @pytest.fixture(scope="module", autouse=True)
 def packaged():
-    if not FMU3.exists() or not TANK3.exists() or not CHANNEL3.exists():
+    if not all(p.exists() for p in (FMU3, TANK3, CHANNEL3, BOX3, BOX2)):
         subprocess.run(["make", "fmu"], cwd=ROOT, check=True)
 
 
@@ -31,7 +33,7 @@ def session(name, **args):
     return run_session("fmu_sessions.py", name, **args)
 
 
-@pytest.mark.parametrize("fmu", [FMU3, FMU2, TANK3, TANK2, CHANNEL3, CHANNEL2],
+@pytest.mark.parametrize("fmu", [FMU3, FMU2, TANK3, TANK2, CHANNEL3, CHANNEL2, BOX3, BOX2],
                          ids=lambda p: "/".join(p.parts[-2:]))
 def test_validation_finds_no_problem(fmu):
     assert validate_fmu(str(fmu)) == []

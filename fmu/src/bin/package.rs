@@ -44,6 +44,11 @@ struct Args {
     /// Keep the binary's symbol table (it is stripped by default: 18 MB -> 14 MB)
     #[arg(long)]
     no_strip: bool,
+    /// Change a key of the case before packaging, as `sphfmu run --set` (e.g.
+    /// --set 'body.0.orientation="matrix"'); the changed case goes under resources/ in place
+    /// of the file's own text, so the FMU runs what its variables describe
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    sets: Vec<String>,
 }
 
 const AFTER_HELP: &str = "\
@@ -112,7 +117,7 @@ fn generation_time() -> Result<u64, String> {
 
 fn run() -> Result<(), String> {
     let a = Args::parse();
-    let case = Case::load(&a.case).map_err(|e| format!("--case: {}", e.0))?;
+    let case = Case::load_with(&a.case, None, &a.sets).map_err(|e| format!("--case: {}", e.0))?;
     let case_file = a
         .case
         .file_name()
@@ -144,12 +149,15 @@ fn run() -> Result<(), String> {
             .to_string();
         resources.push((n, std::fs::read(&p).map_err(|e| e.to_string())?));
     }
-    if !resources.iter().any(|(n, _)| *n == case_file) {
-        resources.push((
-            case_file.clone(),
-            std::fs::read(&a.case).map_err(|e| e.to_string())?,
-        ));
-    }
+    let own = if a.sets.is_empty() {
+        std::fs::read(&a.case).map_err(|e| e.to_string())?
+    } else {
+        let text = case.to_text().map_err(|e| format!("--set: {}", e.0))?;
+        let sets = a.sets.join(" ");
+        format!("# {case_file} packaged with --set {sets}\n{text}").into_bytes()
+    };
+    resources.retain(|(n, _)| *n != case_file);
+    resources.push((case_file.clone(), own));
     let exp = Experiment {
         model_name: case.case.name.clone(),
         description: if case.case.description.is_empty() {

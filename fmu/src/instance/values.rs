@@ -116,7 +116,8 @@ impl Instance {
                 // scalars) is checked as a whole by the next doStep
                 if values.len() == v.size {
                     let (name, form) = &self.table.external_forms[e];
-                    body.kinematics(name, *form).map_err(|m| (Status::Error, m))?;
+                    body.kinematics(name, *form)
+                        .map_err(|m| (Status::Error, m))?;
                 }
                 self.inputs.bodies[e] = body;
             }

@@ -2,10 +2,10 @@
 //! outputs of bodies, probes, markers, patches and ports, and the diagnostics.
 
 use super::*;
+use crate::instance::inputs::OrientationForm;
 use crate::table::units::units;
 use sphfmu::boundary::kinematics::Motion;
 use sphfmu::boundary::ports::PortPressure;
-use crate::instance::inputs::OrientationForm;
 use sphfmu::case::bodies::OrientationInput;
 
 fn pad3(v: &[f64]) -> Vec<f64> {
