@@ -427,10 +427,12 @@ mod tests {
 
     #[test]
     fn a_held_pose_turns_at_its_world_angular_velocity() {
-        let mut pose = Pose::<3>::default();
-        pose.rotation = UnitQuaternion::from_euler_angles(0.3, -0.2, 1.1);
-        pose.angular_velocity = Vector3::new(0.4, -1.0, 0.25);
-        pose.velocity = crate::particles::Vector::<3>::new(1.0, 2.0, 3.0);
+        let pose = Pose::<3> {
+            rotation: UnitQuaternion::from_euler_angles(0.3, -0.2, 1.1),
+            angular_velocity: Vector3::new(0.4, -1.0, 0.25),
+            velocity: crate::particles::Vector::<3>::new(1.0, 2.0, 3.0),
+            ..Default::default()
+        };
         let held = HeldPose { time: 2.0, pose };
         assert_eq!(held.at(2.0), pose);
         let e = 1e-6;
