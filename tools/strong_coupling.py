@@ -9,9 +9,12 @@ The master integrates the body's own Newton-Euler equations,
 
 with F_ext = F_pre - K (x - x_rest) - C v + M g and T_ext = -K_rot phi - C_rot w (phi the
 rotation vector from the rest orientation), by the trapezoidal rule (Newmark, average
-acceleration) over each communication step H. The FMU gets the body's pose at the start of the
-step and the mean velocity and angular velocity that carry it to the pose at the end,
-u = [(x1 - x0)/H, log(R1 R0^T)/H], and returns the fluid's force and torque at the end.
+acceleration) over each communication step H. The FMU gets the body's pose and velocities at
+the start of the step and the constant accelerations that carry them to the end-of-step
+velocities u = [v1, w1]: a = (v1 - v0)/H, alpha = (w1 - w0)/H. Under the trapezoidal rule that
+motion ends exactly at the body's x1 and v1 (x1 = x0 + H (v0 + v1)/2), so the FMU's wall moves
+without the velocity jumps (water hammer, dP = rho c dv) that a constant velocity per step
+would send into a liquid. It returns the fluid's force and torque at the end.
 
 * explicit: the body steps with the fluid loads of the start of the step, then the FMU steps
   with the body's motion (serial staggered: one FMU step per communication step).
@@ -132,7 +135,7 @@ class Fmu:
         md = read_model_description(path)
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
         self.body = body
-        for what in ("position", "velocity", "angular_velocity", "force", "torque"):
+        for what in ("position", "velocity", "acceleration", "angular_velocity", "force", "torque"):
             if f"{body}.{what}" not in self.vr:
                 sys.exit(f"strong_coupling: {path} has no variable {body}.{what}: the body must "
                          "have motion = { type = \"external\" }")
@@ -158,21 +161,27 @@ class Fmu:
     def loads(self):
         return self.get("force", 3), self.get("torque", 3)
 
-    def step(self, t, h, x0, r0, u):
+    def step(self, t, h, s0, u):
+        """One FMU step from body state s0 = (x, v, R, w) to end-of-step velocities u."""
+        x0, v0, r0, w0 = s0
+        a, alpha = (u[:3] - v0) / h, (u[3:] - w0) / h
         self.set("position", x0)
+        self.set("velocity", v0)
+        self.set("acceleration", a)
         if self.planar:
             self.set("angle", [log_rot(r0)[2]])
-            self.set("angular_velocity", [u[5]])
+            self.set("angular_velocity", [w0[2]])
+            self.set("angular_acceleration", [alpha[2]])
         else:
             self.set("orientation", quaternion(r0))
-            self.set("angular_velocity", u[3:])
-        self.set("velocity", u[:3])
+            self.set("angular_velocity", w0)
+            self.set("angular_acceleration", alpha)
         self.fmu.doStep(t, h)
         return self.loads()
 
 
-def mean_velocities(s0, s1, h):
-    return np.concatenate([(s1[0] - s0[0]) / h, log_rot(s1[2] @ s0[2].T) / h])
+def end_velocities(s):
+    return np.concatenate([s[1], s[3]])
 
 
 def run(fmu_path, body_name, mass, step, stop, mode="implicit", inertia=(1.0, 1.0, 1.0),
@@ -202,20 +211,26 @@ def run(fmu_path, body_name, mass, step, stop, mode="implicit", inertia=(1.0, 1.
             s0 = body.state()
             if mode == "explicit":
                 s1 = body.step(step, loads, loads)
-                loads1 = fmu.step(t, step, s0[0], s0[2], mean_velocities(s0, s1, step))
+                try:
+                    loads1 = fmu.step(t, step, s0, end_velocities(s1))
+                except Exception as e:  # fmpy's FMICallException: the fluid blew up
+                    print(f"strong_coupling: t = {t:.4g}: the FMU failed ({e}): diverged",
+                          file=sys.stderr)
+                    diverged = t
+                    break
                 its = 1
             else:
                 saved = fmu.fmu.getFMUState()
                 # predictor: the body under the loads of the step's start
-                u = mean_velocities(s0, body.step(step, loads, loads), step)
+                u = end_velocities(body.step(step, loads, loads))
                 r_prev, w_relax = None, 0.5
                 for its in range(1, max_iterations + 1):
                     if its > 1:
                         fmu.fmu.setFMUState(saved)
-                    loads1 = fmu.step(t, step, s0[0], s0[2], u)
+                    loads1 = fmu.step(t, step, s0, u)
                     body.set_state(s0)
                     s1 = body.step(step, loads, loads1)
-                    r = mean_velocities(s0, s1, step) - u
+                    r = end_velocities(s1) - u
                     if np.abs(r).max() <= tol * (np.abs(u).max() + scale):
                         break
                     if r_prev is not None:

@@ -122,8 +122,8 @@ impl<const D: usize> Pose<D> {
 }
 
 /// The pose last set from outside (`Motion::External`, the Coupling API) and when: between
-/// two updates the body moves on at the velocities it was given (so its acceleration is zero
-/// and the wall condition sees none).
+/// two updates the body moves on at the acceleration and angular acceleration it was given
+/// (zero unless the master gives them: then at constant velocities).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 pub struct HeldPose<const D: usize> {
     pub time: f64,
@@ -131,23 +131,29 @@ pub struct HeldPose<const D: usize> {
 }
 
 impl<const D: usize> HeldPose<D> {
-    /// The pose at t ≥ `time`: displacement carried on at constant velocity, the rotation at
-    /// constant world angular velocity ω, R(t) = exp((t − t0) [ω]×) R(t0).
+    /// The pose at t ≥ `time`: the reference point on a parabola, d0 + v0 τ + a τ²/2
+    /// (τ = t − time), and the rotation R(t) = exp([φ(τ)]×) R0 with the rotation vector
+    /// φ = ω0 τ + α τ²/2 and ω(t) = ω0 + α τ. That is exact for a rotation about a fixed axis
+    /// (α ∥ ω0, every 2D motion) and second-order accurate otherwise, the order of the
+    /// master's own integrator across a communication step. With a = α = 0 the body moves
+    /// on at constant velocity and world angular velocity.
     pub fn at(&self, t: f64) -> Pose<D> {
         let dt = t - self.time;
-        let w = self.pose.angular_velocity;
-        let rotation = if dt == 0.0 || w == Vector3::zeros() {
-            self.pose.rotation
+        let p = &self.pose;
+        let (w, al) = (p.angular_velocity, p.angular_acceleration);
+        let phi = w * dt + al * (0.5 * dt * dt);
+        let rotation = if dt == 0.0 || phi == Vector3::zeros() {
+            p.rotation
         } else {
-            UnitQuaternion::from_scaled_axis(w * dt) * self.pose.rotation
+            UnitQuaternion::from_scaled_axis(phi) * p.rotation
         };
         Pose {
-            displacement: self.pose.displacement + self.pose.velocity * dt,
-            velocity: self.pose.velocity,
-            acceleration: crate::particles::Vector::<D>::zeros(),
+            displacement: p.displacement + p.velocity * dt + p.acceleration * (0.5 * dt * dt),
+            velocity: p.velocity + p.acceleration * dt,
+            acceleration: p.acceleration,
             rotation,
-            angular_velocity: w,
-            angular_acceleration: Vector3::zeros(),
+            angular_velocity: w + al * dt,
+            angular_acceleration: al,
         }
     }
 }

@@ -109,6 +109,8 @@ impl<const D: usize> Engine for Coupled<D> {
             orientation: super::orientation::to_array(&p.rotation),
             velocity: array(&p.velocity),
             angular_velocity: p.angular_velocity.into(),
+            acceleration: array(&p.acceleration),
+            angular_acceleration: p.angular_acceleration.into(),
         }
     }
 
@@ -126,7 +128,8 @@ impl<const D: usize> Engine for Coupled<D> {
                         .expect("checked"),
                 ),
                 angular_velocity: k.angular_velocity.into(),
-                ..Pose::default()
+                acceleration: vector::<D>(&k.acceleration),
+                angular_acceleration: k.angular_acceleration.into(),
             },
         };
         self.dirty |= held.at(time) != body.pose;

@@ -118,14 +118,19 @@ impl CouplingOptions {
 /// Pose and velocities of an externally driven body (`motion = { type = "external" }`):
 /// the position of its reference point, its orientation (a unit quaternion [w, x, y, z] that
 /// turns body offsets into world offsets, `orientation`; 2D: a rotation about z, 1D: the
-/// identity), and the velocity and world angular velocity it moves on with until the next
-/// update. Entries beyond the case's dimension must be 0 (2D: ω about z only).
+/// identity), its velocity and world angular velocity, and the acceleration and angular
+/// acceleration it moves on with until the next update (`HeldPose`: zero by default, so the
+/// body moves on at constant velocity; a master integrating the body by the trapezoidal rule
+/// gives a = (v1 − v0)/H and the body reaches its x1 and v1 exactly). Entries beyond the
+/// case's dimension must be 0 (2D: ω and α about z only).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BodyKinematics {
     pub position: [f64; 3],
     pub orientation: [f64; 4],
     pub velocity: [f64; 3],
     pub angular_velocity: [f64; 3],
+    pub acceleration: [f64; 3],
+    pub angular_acceleration: [f64; 3],
 }
 
 impl Default for BodyKinematics {
@@ -135,6 +140,8 @@ impl Default for BodyKinematics {
             orientation: orientation::IDENTITY,
             velocity: [0.0; 3],
             angular_velocity: [0.0; 3],
+            acceleration: [0.0; 3],
+            angular_acceleration: [0.0; 3],
         }
     }
 }
@@ -372,15 +379,21 @@ impl Coupling {
         let key = |f: &str| format!("body {:?} {f}", cfg.name);
         check_vector(&key("position"), &k.position, d)?;
         check_vector(&key("velocity"), &k.velocity, d)?;
+        check_vector(&key("acceleration"), &k.acceleration, d)?;
         let q = orientation::unit_quaternion(&key("orientation"), &k.orientation)
             .map_err(CouplingError)?;
-        let w = &k.angular_velocity;
-        if let Some(x) = w.iter().find(|x| !x.is_finite()) {
-            return Err(CouplingError(format!(
-                "{}: entries must be finite, got {x}",
-                key("angular_velocity")
-            )));
+        for (f, v) in [
+            ("angular_velocity", &k.angular_velocity),
+            ("angular_acceleration", &k.angular_acceleration),
+        ] {
+            if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+                return Err(CouplingError(format!(
+                    "{}: entries must be finite, got {x}",
+                    key(f)
+                )));
+            }
         }
+        let (w, al) = (&k.angular_velocity, &k.angular_acceleration);
         // a 2D body turns about z only, a 1D body not at all
         let (turns, about) = match d {
             1 => (&[][..], "does not rotate in a 1D case"),
@@ -388,10 +401,10 @@ impl Coupling {
             _ => (&[0, 1, 2][..], ""),
         };
         for c in 0..3 {
-            if !turns.contains(&c) && (w[c] != 0.0 || q[c + 1] != 0.0) {
+            if !turns.contains(&c) && (w[c] != 0.0 || al[c] != 0.0 || q[c + 1] != 0.0) {
                 return Err(CouplingError(format!(
-                    "{}: the body {about}: angular velocity {w:?} and quaternion [w, x, y, z] {q:?} must have 0 in {}",
-                    key("orientation / angular_velocity"),
+                    "{}: the body {about}: angular velocity {w:?}, angular acceleration {al:?} and quaternion [w, x, y, z] {q:?} must have 0 in {}",
+                    key("orientation / angular_velocity / angular_acceleration"),
                     ["x", "y", "z"][c]
                 )));
             }

@@ -16,6 +16,9 @@ pub(crate) struct BodyInputs {
     pub matrix_t: [f64; 9],
     /// World axes; a 2D body's scalar input is the z entry.
     pub angular_velocity: [f64; 3],
+    pub acceleration: [f64; 3],
+    /// As `angular_velocity`.
+    pub angular_acceleration: [f64; 3],
 }
 
 impl Default for BodyInputs {
@@ -27,6 +30,8 @@ impl Default for BodyInputs {
             quaternion: orientation::IDENTITY,
             matrix_t: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
             angular_velocity: [0.0; 3],
+            acceleration: [0.0; 3],
+            angular_acceleration: [0.0; 3],
         }
     }
 }
@@ -57,6 +62,8 @@ impl BodyInputs {
             orientation,
             velocity: self.velocity,
             angular_velocity: self.angular_velocity,
+            acceleration: self.acceleration,
+            angular_acceleration: self.angular_acceleration,
         })
     }
 
@@ -68,6 +75,8 @@ impl BodyInputs {
             .chain(&self.quaternion)
             .chain(&self.matrix_t)
             .chain(&self.angular_velocity)
+            .chain(&self.acceleration)
+            .chain(&self.angular_acceleration)
     }
 
     fn numbers_mut(&mut self) -> impl Iterator<Item = &mut f64> {
@@ -78,11 +87,13 @@ impl BodyInputs {
             .chain(&mut self.quaternion)
             .chain(&mut self.matrix_t)
             .chain(&mut self.angular_velocity)
+            .chain(&mut self.acceleration)
+            .chain(&mut self.angular_acceleration)
     }
 }
 
-/// Numbers per body in a serialized state (3 + 3 + 1 + 4 + 9 + 3).
-const BODY_NUMBERS: usize = 23;
+/// Numbers per body in a serialized state (3 + 3 + 1 + 4 + 9 + 3 + 3 + 3).
+const BODY_NUMBERS: usize = 29;
 
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Inputs {
@@ -127,11 +138,12 @@ pub(crate) fn start_inputs(table: &Table) -> Inputs {
 /// The serialized FMU state's envelope (`sphfmu::coupling::state::seal`): magic bytes and
 /// format version; the CRC-32 covers the inputs and the solver's own (sealed) bytes alike.
 const MAGIC: [u8; 8] = *b"sphfmuFS";
-/// 2: a body carries its angle, quaternion, matrix and 3-vector angular velocity (issue 22).
+/// 2: a body carries its angle, quaternion, matrix, 3-vector angular velocity and the
+/// accelerations (issue 22).
 const VERSION: u32 = 2;
 
 impl Snapshot {
-    /// Sealed bytes: gravity, start time, the body count and 23 numbers per body, the port
+    /// Sealed bytes: gravity, start time, the body count and 29 numbers per body, the port
     /// count and one pressure per port (f64 little endian), then the solver's state.
     pub fn serialize(&self) -> Vec<u8> {
         let mut out = Vec::new();

@@ -121,10 +121,16 @@ impl Instance {
                 }
                 self.inputs.bodies[e] = body;
             }
-            Binding::BodyAngularVelocity(b) => {
+            Binding::BodyAcceleration(b) => put(&mut self.inputs.bodies[ext(b)].acceleration),
+            Binding::BodyAngularVelocity(b) | Binding::BodyAngularAcceleration(b) => {
                 // a 2D body's scalar input is the z entry
                 let first = if v.size == 1 { 2 } else { first };
-                let w = &mut self.inputs.bodies[ext(b)].angular_velocity;
+                let body = &mut self.inputs.bodies[ext(b)];
+                let w = if matches!(v.binding, Binding::BodyAngularVelocity(_)) {
+                    &mut body.angular_velocity
+                } else {
+                    &mut body.angular_acceleration
+                };
                 w[first..first + values.len()].copy_from_slice(values);
             }
             Binding::PortPressure(k) => {
@@ -207,8 +213,14 @@ impl Instance {
             Binding::BodyAngle(b) => vec![self.inputs.bodies[ext(b)].angle],
             Binding::BodyQuaternion(b) => self.inputs.bodies[ext(b)].quaternion.to_vec(),
             Binding::BodyMatrix(b) => self.inputs.bodies[ext(b)].matrix_t.to_vec(),
-            Binding::BodyAngularVelocity(b) => {
-                let w = self.inputs.bodies[ext(b)].angular_velocity;
+            Binding::BodyAcceleration(b) => self.inputs.bodies[ext(b)].acceleration.to_vec(),
+            Binding::BodyAngularVelocity(b) | Binding::BodyAngularAcceleration(b) => {
+                let body = &self.inputs.bodies[ext(b)];
+                let w = if matches!(v.binding, Binding::BodyAngularVelocity(_)) {
+                    body.angular_velocity
+                } else {
+                    body.angular_acceleration
+                };
                 if v.size == 1 {
                     vec![w[2]]
                 } else {

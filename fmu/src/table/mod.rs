@@ -55,6 +55,8 @@ pub enum Binding {
     BodyMatrix(usize),
     BodyVelocity(usize),
     BodyAngularVelocity(usize),
+    BodyAcceleration(usize),
+    BodyAngularAcceleration(usize),
     BodyForce(usize),
     BodyTorque(usize),
     BodyForceBody(usize),

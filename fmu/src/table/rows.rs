@@ -242,10 +242,20 @@ impl Table {
             };
             v.input(
                 format!("{n}.angular_velocity"),
-                omega,
+                omega.clone(),
                 "rad/s",
                 format!("Angular velocity of body {n} {about}"),
                 Binding::BodyAngularVelocity(i),
+            );
+            v.input(format!("{n}.acceleration"), vec![0.0; 3], "m/s2",
+                format!("Acceleration of body {n}'s reference point over the next step (0: it moves on at constant velocity; a trapezoidal master gives (v1 - v0)/H)"),
+                Binding::BodyAcceleration(i));
+            v.input(
+                format!("{n}.angular_acceleration"),
+                omega,
+                "rad/s2",
+                format!("Angular acceleration of body {n} {about} over the next step"),
+                Binding::BodyAngularAcceleration(i),
             );
         }
         for (i, b) in case.bodies.iter().enumerate() {
