@@ -22,7 +22,8 @@ build:
 # under target/fmu/slosh2d/, and the 3D box driven in six degrees of freedom under
 # target/fmu/box3d/ (orientation as a quaternion) and target/fmu/box3d-matrix/ (as Modelica's
 # R.T), and the light piston under a water column (strong coupling) under
-# target/fmu/added-mass2d/ (the tests use them all). `make fmu FMU_CASE=models/x.toml` also
+# target/fmu/added-mass2d/ and the tuned liquid damper under target/fmu/tld2d/ (the tests
+# use them all). `make fmu FMU_CASE=models/x.toml` also
 # packages x under target/fmu/<its case name>/ and leaves the others alone. `cargo build
 # --workspace` also builds the zenoh node sphfmu-serve (`sphfmu serve`).
 DEMO_CASE := models/free-piston2d.toml
@@ -38,6 +39,7 @@ fmu:
 	$(PACKAGE) --case models/box3d.toml --out target/fmu/box3d
 	$(PACKAGE) --case models/box3d.toml --set 'body.0.orientation="matrix"' --out target/fmu/box3d-matrix
 	$(PACKAGE) --case models/added-mass2d.toml --out target/fmu/added-mass2d
+	$(PACKAGE) --case models/tld2d.toml --out target/fmu/tld2d
 	$(if $(FMU_CASE),$(PACKAGE) --case $(FMU_CASE))
 
 # Main job: build the FMU and co-simulate a free piston on a gas spring with a Python master
@@ -92,11 +94,14 @@ bench-peer: build
 # The verification suite: every headline claim of the three papers (models/verify/suite.toml)
 # run with every scheme it compares, judged against the paper's figure, reported in
 # docs/verification/README.md with its PNGs (tools/verify.py; VERIFY_ARGS="--only ID,..." for a
-# part). Then the remaining ignored tests (paper-resolution Sedov and Noh, the kernel choice).
+# part). Then the remaining ignored tests (paper-resolution Sedov and Noh, the kernel choice)
+# and the long co-simulations (pytest marker `verify`: the tuned liquid damper, the 3D tank in
+# pitch).
 VERIFY_ARGS ?=
-verify: build venv
+verify: build fmu venv
 	$(VPY) tools/verify.py --jobs 2 $(VERIFY_ARGS)
 	$(CARGO) test --release -- --ignored --nocapture
+	SPHFMU_VERIFY=1 $(VPY) -m pytest tests/fmpy -q -s -m verify
 
 clean:
 	$(CARGO) clean

@@ -35,3 +35,17 @@ def run_session(script, name, **args):
                        capture_output=True, text=True, cwd=here, timeout=600)
     assert p.returncode == 0, f"session {name} died (exit {p.returncode}):\n{p.stdout[-2000:]}\n{p.stderr[-3000:]}"
     return json.loads(p.stdout.strip().splitlines()[-1])
+
+
+def pytest_configure(config):
+    config.addinivalue_line(
+        "markers", "verify: a long co-simulation run by `make verify` (SPHFMU_VERIFY=1), not `make test`")
+
+
+def pytest_collection_modifyitems(config, items):
+    if os.environ.get("SPHFMU_VERIFY") == "1":
+        return
+    skip = pytest.mark.skip(reason="make verify runs it (SPHFMU_VERIFY=1)")
+    for item in items:
+        if "verify" in item.keywords:
+            item.add_marker(skip)
