@@ -137,8 +137,8 @@ fn bad_frames_are_clear_errors() {
     let base = common::model_text("tank2d.toml");
     for (frame, msg) in [
         (
-            r#"motion = { type = "external" }"#,
-            "frame.motion: \"external\"",
+            "motion = { type = \"external\" }\norientation = \"matrix\"",
+            "frame.orientation: \"matrix\" is for a 3D frame",
         ),
         (
             r#"motion = { type = "table", time = [0.0, 1.0], displacement = [[0.0, 0.0], [0.1, 0.0]] }"#,

@@ -1,7 +1,8 @@
-//! The body-fixed (non-inertial) frame of a case (issue 5, `[frame]`): instead of moving a
-//! tank's walls through the box, the whole computation stays in the tank's frame, which moves
-//! with a prescribed motion (translation d(t) of its reference point and a rotation R(t),
-//! `boundary::kinematics`). Every particle then feels, besides the inertial gravity g, the
+//! The body-fixed (non-inertial) frame of a case (issues 5 and 22, `[frame]`): instead of
+//! moving a tank's walls through the box, the whole computation stays in the tank's frame,
+//! which moves with a prescribed motion or one a master sets (`motion = external`: any 3D
+//! pose, with the accelerations held over a step), a translation d(t) of its reference point
+//! and a rotation R(t) (`boundary::kinematics`). Every particle then feels, besides the inertial gravity g, the
 //! fictitious accelerations of a frame with origin acceleration A = d̈ and angular velocity
 //! Ω (e.g. Landau & Lifshitz, Mechanics §39):
 //!
@@ -14,7 +15,8 @@
 //! reported in frame coordinates. The wall condition's hydrostatic term (Adami et al. 2012,
 //! eq. 27) uses the same effective body force at the wall particle.
 
-use super::kinematics::{from3, to3, Motion, Pose};
+use super::kinematics::{from3, to3, HeldPose, Motion, Pose};
+use crate::case::bodies::OrientationInput;
 use crate::particles::Vector;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -23,7 +25,9 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FrameConfig {
-    /// The frame's motion (fixed, sinusoid, ramp or table; not external).
+    /// The frame's motion: fixed, sinusoid or ramp (about `axis`), or external (set by a
+    /// master: the Coupling API's `set_frame_kinematics`, the FMU's `frame.*` inputs, any 3D
+    /// pose with its angular velocity and the accelerations held over a step).
     pub motion: Motion,
     /// Point the rotation is about, in frame coordinates (default: the origin).
     #[serde(default)]
@@ -31,14 +35,21 @@ pub struct FrameConfig {
     /// Rotation axis (3D; default z). 2D frames rotate about z.
     #[serde(default)]
     pub axis: Option<Vec<f64>>,
+    /// The FMU's orientation input of an external 3D frame: "quaternion" (`frame.orientation`,
+    /// default) or "matrix" (`frame.T`, Modelica's R.T).
+    #[serde(default)]
+    pub orientation: OrientationInput,
 }
 
 impl FrameConfig {
     pub fn validate(&self, dim: usize) -> Result<(), String> {
-        if matches!(self.motion, Motion::External) {
-            return Err(
-                "frame.motion: \"external\" is not available for the frame; use a moving body with motion = { type = \"external\" }".into(),
-            );
+        if self.orientation != OrientationInput::Quaternion
+            && !(dim == 3 && self.motion == Motion::External)
+        {
+            return Err(format!(
+                "frame.orientation: \"matrix\" is for a 3D frame with motion = {{ type = \"external\" }} (this is a {dim}D frame{})",
+                if self.motion == Motion::External { "" } else { " with a prescribed motion" }
+            ));
         }
         if let Motion::Table { .. } = self.motion {
             return Err(
@@ -83,6 +94,7 @@ impl FrameConfig {
                 .unwrap_or_else(Vector::<D>::zeros),
             axis,
             pose: Pose::default(),
+            held: HeldPose::default(),
         }
     }
 }
@@ -96,6 +108,8 @@ pub struct Frame<const D: usize> {
     pub reference: Vector<D>,
     pub axis: Vector3<f64>,
     pub pose: Pose<D>,
+    /// The pose a master set (`Motion::External`), carried on at its accelerations.
+    pub held: HeldPose<D>,
 }
 
 /// Body force per unit mass at x moving at v: `uniform` without a frame, else the frame's
@@ -116,9 +130,12 @@ pub fn body_force_in<const D: usize>(
 impl<const D: usize> Frame<D> {
     /// The frame's pose at time t.
     pub fn place(&mut self, t: f64) {
-        self.pose = self
-            .motion
-            .pose::<D>(t, &nalgebra::Unit::new_normalize(self.axis));
+        self.pose = match self.motion {
+            Motion::External => self.held.at(t),
+            _ => self
+                .motion
+                .pose::<D>(t, &nalgebra::Unit::new_normalize(self.axis)),
+        };
     }
 
     /// The uniform part of the body force in frame coordinates, Rᵀ(g − A).

@@ -17,6 +17,8 @@ pub(super) trait Engine: Send + Sync {
     fn set_gravity(&mut self, g: &[f64; 3]);
     fn body(&self, b: usize) -> BodyKinematics;
     fn set_body(&mut self, b: usize, k: &BodyKinematics);
+    fn frame(&self) -> Option<BodyKinematics>;
+    fn set_frame(&mut self, k: &BodyKinematics);
     fn advance_to(&mut self, t: f64, chunk: &Chunk) -> Result<StepReport, SolverError>;
     fn loads(&self) -> Vec<BodyLoads>;
     fn set_port_pressure(&mut self, k: usize, p: f64);
@@ -30,6 +32,35 @@ pub(super) trait Engine: Send + Sync {
     fn write_vtu(&self, path: &std::path::Path) -> std::io::Result<()>;
     fn save(&self, fingerprint: u64) -> Vec<u8>;
     fn restore(&mut self, bytes: &[u8], fingerprint: u64) -> Result<(), String>;
+}
+
+/// The kinematics a master reads of a pose about `reference`.
+fn kinematics_of<const D: usize>(reference: &Vector<D>, p: &Pose<D>) -> BodyKinematics {
+    BodyKinematics {
+        position: array(&(reference + p.displacement)),
+        orientation: super::orientation::to_array(&p.rotation),
+        velocity: array(&p.velocity),
+        angular_velocity: p.angular_velocity.into(),
+        acceleration: array(&p.acceleration),
+        angular_acceleration: p.angular_acceleration.into(),
+    }
+}
+
+/// The pose a master's kinematics set at `time` (checked by `Coupling::check_body_kinematics`:
+/// its quaternion is within 1e-6 of unit length).
+fn held_pose<const D: usize>(time: f64, reference: &Vector<D>, k: &BodyKinematics) -> HeldPose<D> {
+    let q = super::orientation::unit_quaternion("orientation", &k.orientation).expect("checked");
+    HeldPose {
+        time,
+        pose: Pose {
+            displacement: vector::<D>(&k.position) - reference,
+            velocity: vector::<D>(&k.velocity),
+            rotation: super::orientation::to_unit(&q),
+            angular_velocity: k.angular_velocity.into(),
+            acceleration: vector::<D>(&k.acceleration),
+            angular_acceleration: k.angular_acceleration.into(),
+        },
+    }
 }
 
 pub(super) fn build(case: &Case) -> Result<Box<dyn Engine>, CouplingError> {
@@ -103,37 +134,29 @@ impl<const D: usize> Engine for Coupled<D> {
 
     fn body(&self, b: usize) -> BodyKinematics {
         let body = &self.sim.sys.bodies[b];
-        let p = &body.pose;
-        BodyKinematics {
-            position: array(&(body.reference + p.displacement)),
-            orientation: super::orientation::to_array(&p.rotation),
-            velocity: array(&p.velocity),
-            angular_velocity: p.angular_velocity.into(),
-            acceleration: array(&p.acceleration),
-            angular_acceleration: p.angular_acceleration.into(),
-        }
+        kinematics_of(&body.reference, &body.pose)
     }
 
     fn set_body(&mut self, b: usize, k: &BodyKinematics) {
         let time = self.sim.time;
         let body = &mut self.sim.sys.bodies[b];
-        let held = HeldPose {
-            time,
-            pose: Pose {
-                displacement: vector::<D>(&k.position) - body.reference,
-                velocity: vector::<D>(&k.velocity),
-                // checked by Coupling::check_body_kinematics: within 1e-6 of unit length
-                rotation: super::orientation::to_unit(
-                    &super::orientation::unit_quaternion("orientation", &k.orientation)
-                        .expect("checked"),
-                ),
-                angular_velocity: k.angular_velocity.into(),
-                acceleration: vector::<D>(&k.acceleration),
-                angular_acceleration: k.angular_acceleration.into(),
-            },
-        };
+        let held = held_pose(time, &body.reference, k);
         self.dirty |= held.at(time) != body.pose;
         body.held = held;
+    }
+
+    fn frame(&self) -> Option<BodyKinematics> {
+        let f = self.sim.sys.frame.as_ref()?;
+        Some(kinematics_of(&f.reference, &f.pose))
+    }
+
+    fn set_frame(&mut self, k: &BodyKinematics) {
+        let time = self.sim.time;
+        if let Some(f) = &mut self.sim.sys.frame {
+            let held = held_pose(time, &f.reference, k);
+            self.dirty |= held.at(time) != f.pose;
+            f.held = held;
+        }
     }
 
     fn advance_to(&mut self, t: f64, chunk: &Chunk) -> Result<StepReport, SolverError> {

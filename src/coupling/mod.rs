@@ -376,40 +376,39 @@ impl Coupling {
                 cfg.name
             )));
         }
-        let key = |f: &str| format!("body {:?} {f}", cfg.name);
-        check_vector(&key("position"), &k.position, d)?;
-        check_vector(&key("velocity"), &k.velocity, d)?;
-        check_vector(&key("acceleration"), &k.acceleration, d)?;
-        let q = orientation::unit_quaternion(&key("orientation"), &k.orientation)
-            .map_err(CouplingError)?;
-        for (f, v) in [
-            ("angular_velocity", &k.angular_velocity),
-            ("angular_acceleration", &k.angular_acceleration),
-        ] {
-            if let Some(x) = v.iter().find(|x| !x.is_finite()) {
-                return Err(CouplingError(format!(
-                    "{}: entries must be finite, got {x}",
-                    key(f)
-                )));
-            }
-        }
-        let (w, al) = (&k.angular_velocity, &k.angular_acceleration);
-        // a 2D body turns about z only, a 1D body not at all
-        let (turns, about) = match d {
-            1 => (&[][..], "does not rotate in a 1D case"),
-            2 => (&[2][..], "turns about z only in a 2D case"),
-            _ => (&[0, 1, 2][..], ""),
-        };
-        for c in 0..3 {
-            if !turns.contains(&c) && (w[c] != 0.0 || al[c] != 0.0 || q[c + 1] != 0.0) {
-                return Err(CouplingError(format!(
-                    "{}: the body {about}: angular velocity {w:?}, angular acceleration {al:?} and quaternion [w, x, y, z] {q:?} must have 0 in {}",
-                    key("orientation / angular_velocity / angular_acceleration"),
-                    ["x", "y", "z"][c]
-                )));
-            }
-        }
+        check_rigid_motion(&format!("body {:?}", cfg.name), k, d)
+    }
+
+    /// Whether the case has a frame driven from outside (`[frame] motion = external`).
+    pub fn has_external_frame(&self) -> bool {
+        self.case
+            .frame
+            .as_ref()
+            .is_some_and(|f| f.motion == crate::boundary::kinematics::Motion::External)
+    }
+
+    /// The pose, velocities and accelerations of the case's frame from now on (its motion
+    /// must be external). Its position and velocity do not enter the physics (the frame's
+    /// forces are those of its acceleration and rotation); they are kept for the master.
+    pub fn set_frame_kinematics(&mut self, k: &BodyKinematics) -> Result<(), CouplingError> {
+        self.check_frame_kinematics(k)?;
+        self.engine.set_frame(k);
         Ok(())
+    }
+
+    /// Whether [`Self::set_frame_kinematics`] would take `k` (it changes nothing).
+    pub fn check_frame_kinematics(&self, k: &BodyKinematics) -> Result<(), CouplingError> {
+        if !self.has_external_frame() {
+            return Err(CouplingError(
+                "frame: the case has no [frame] with motion = { type = \"external\" }".into(),
+            ));
+        }
+        check_rigid_motion("frame", k, self.dimension())
+    }
+
+    /// The frame's current pose and velocities (`None` without a `[frame]`).
+    pub fn frame_kinematics(&self) -> Option<BodyKinematics> {
+        self.engine.frame()
     }
 
     /// Current pose and velocities of body `body` (any motion).
@@ -575,6 +574,46 @@ fn check_vector(key: &str, v: &[f64; 3], d: usize) -> Result<(), CouplingError> 
             return Err(CouplingError(format!(
                 "{key}[{k}]: must be 0 in a {d}D case, got {x}"
             )));
+        }
+    }
+    Ok(())
+}
+
+/// The checks every master-set rigid motion passes (`what` names the body or the frame): finite
+/// numbers, 0 beyond the dimension, a quaternion within 1e-6 of unit length, and in 2D a
+/// rotation, angular velocity and angular acceleration about z only (none in 1D).
+fn check_rigid_motion(what: &str, k: &BodyKinematics, d: usize) -> Result<(), CouplingError> {
+    let key = |f: &str| format!("{what} {f}");
+    check_vector(&key("position"), &k.position, d)?;
+    check_vector(&key("velocity"), &k.velocity, d)?;
+    check_vector(&key("acceleration"), &k.acceleration, d)?;
+    let q =
+        orientation::unit_quaternion(&key("orientation"), &k.orientation).map_err(CouplingError)?;
+    for (f, v) in [
+        ("angular_velocity", &k.angular_velocity),
+        ("angular_acceleration", &k.angular_acceleration),
+    ] {
+        if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+            return Err(CouplingError(format!(
+                "{}: entries must be finite, got {x}",
+                key(f)
+            )));
+        }
+    }
+    let (w, al) = (&k.angular_velocity, &k.angular_acceleration);
+    // a 2D body turns about z only, a 1D body not at all
+    let (turns, about) = match d {
+        1 => (&[][..], "nothing rotates in a 1D case"),
+        2 => (&[2][..], "it turns about z only in a 2D case"),
+        _ => (&[0, 1, 2][..], ""),
+    };
+    for c in 0..3 {
+        if !turns.contains(&c) && (w[c] != 0.0 || al[c] != 0.0 || q[c + 1] != 0.0) {
+            return Err(CouplingError(format!(
+                    "{}: {about}: angular velocity {w:?}, angular acceleration {al:?} and quaternion [w, x, y, z] {q:?} must have 0 in {}",
+                    key("orientation / angular_velocity / angular_acceleration"),
+                    ["x", "y", "z"][c]
+                )));
         }
     }
     Ok(())

@@ -18,6 +18,7 @@
 
 use super::engine::Coupled;
 use crate::boundary::bodies::Body;
+use crate::boundary::kinematics::HeldPose;
 use crate::boundary::ports::Port;
 use crate::case::Case;
 use crate::integrate::Integrator;
@@ -28,7 +29,8 @@ use serde::{Deserialize, Serialize};
 
 const MAGIC: [u8; 8] = *b"sphfmu\0s";
 /// 3: the checksummed envelope. 4: the cell grid keeps a width and a period per axis.
-const VERSION: u32 = 4;
+/// 5: body poses are quaternions with angular velocity vectors; the frame's pose a master set.
+const VERSION: u32 = 5;
 
 #[derive(Serialize, Deserialize)]
 struct Header {
@@ -46,6 +48,8 @@ pub(super) struct Saved<const D: usize> {
     pub(super) gravity: Vector<D>,
     pub(super) particles: Particles<D>,
     pub(super) bodies: Vec<Body<D>>,
+    /// The pose a master set for an external frame (`None` without a frame).
+    pub(super) frame_held: Option<HeldPose<D>>,
     pub(super) ports: Vec<Port<D>>,
     pub(super) grid: CellGrid<D>,
     pub(super) verlet: VerletList<D>,
@@ -80,6 +84,7 @@ pub(super) fn save<const D: usize>(c: &Coupled<D>, fingerprint: u64) -> Vec<u8> 
         gravity: sys.gravity,
         particles: sys.particles.clone(),
         bodies: sys.bodies.clone(),
+        frame_held: sys.frame.as_ref().map(|f| f.held),
         ports: sys.ports.clone(),
         grid: sys.grid.clone(),
         verlet: sys.verlet.clone(),
@@ -192,8 +197,12 @@ pub(super) fn restore<const D: usize>(
     }
     sys.ports = ports;
     sys.time = saved.time;
-    // the frame's pose is a function of time only (no external frame motion)
+    // a prescribed frame's pose is a function of time; an external one's comes from its held
+    // pose (checked against the case's frame by `integrity`)
     if let Some(f) = &mut sys.frame {
+        if let Some(h) = saved.frame_held {
+            f.held = h;
+        }
         f.place(saved.time);
     }
     sys.grid = saved.grid;

@@ -127,6 +127,33 @@ def session_tilted_box(fmu_path, roll, pitch, ramp, t_end, window, dt, resolutio
     }
 
 
+def session_pitched_tank(fmu_path, amplitude, omega, cycles, free_time, dt):
+    """Pitch the tank about y, theta = amplitude sin(omega t) for `cycles` periods (with the
+    exact angular velocity and acceleration of that motion each step), then hold it level;
+    record the wall marker's pressure and the tank's horizontal force."""
+    fmu, vr = open_box(fmu_path, 1.0)
+    forced = cycles * 2.0 * np.pi / omega
+    steps = int(round((forced + free_time) / dt))
+    rows = []
+    for k in range(steps):
+        t = k * dt
+        on = t < forced - 1e-12
+        theta = amplitude * np.sin(omega * t) if on else 0.0
+        rate = amplitude * omega * np.cos(omega * t) if on else 0.0
+        accel = -amplitude * omega ** 2 * np.sin(omega * t) if on else 0.0
+        fmu.setFloat64([vr["tank.orientation"]], [np.cos(theta / 2), 0.0, np.sin(theta / 2), 0.0])
+        fmu.setFloat64([vr["tank.angular_velocity"]], [0.0, rate, 0.0])
+        fmu.setFloat64([vr["tank.angular_acceleration"]], [0.0, accel, 0.0])
+        fmu.doStep(t, dt)
+        rows.append([t + dt, read(fmu, vr, "marker.wall.pressure", 1)[0],
+                     *read(fmu, vr, "tank.force")])
+        if k % 50 == 0:
+            print(f"t = {t + dt:.3f}", file=sys.stderr, flush=True)
+    fmu.terminate()
+    fmu.freeInstance()
+    return {"forced": forced, "rows": rows}
+
+
 def turn_and_step(fmu_path, name, value, omega=(0.0, 0.0, 0.0)):
     """Step the box at rest, turn it to `value` (its orientation input `name`), step on; the
     loads' bits."""

@@ -25,14 +25,14 @@ def run(cmd, **kw):
     return subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "NO_COLOR": "1"}, **kw)
 
 
-def run_session(script, name, **args):
+def run_session(script, name, timeout=600, **args):
     """Run session `name` of `script` (a sessions file next to this one) in a fresh Python
     process, so a crash in the FMU fails one test and pytest survives; its JSON result."""
     import json
     import sys
     here = pathlib.Path(__file__).resolve().parent
     p = subprocess.run([sys.executable, str(here / script), name, json.dumps(args)],
-                       capture_output=True, text=True, cwd=here, timeout=600)
+                       capture_output=True, text=True, cwd=here, timeout=timeout)
     assert p.returncode == 0, f"session {name} died (exit {p.returncode}):\n{p.stdout[-2000:]}\n{p.stderr[-3000:]}"
     return json.loads(p.stdout.strip().splitlines()[-1])
 

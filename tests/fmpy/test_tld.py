@@ -15,6 +15,7 @@ from test_fmu import ROOT
 
 sys.path.insert(0, str(ROOT / "tools"))
 import strong_coupling  # noqa: E402
+from signals import modes  # noqa: E402
 
 FMU = ROOT / "target" / "fmu" / "tld2d" / "sphfmu.fmu"
 M, K = 2500.0, 84800.0
@@ -37,18 +38,6 @@ def equivalent_mechanical_model(rho=1000.0, length=1.0, depth=0.5, g=9.81):
     stiffness = np.array([[K + k1, -k1], [-k1, k1]])
     mass = np.diag([M + m - m1, m1])
     return np.sqrt(np.sort(np.linalg.eigvals(np.linalg.solve(mass, stiffness)).real)), w1
-
-
-def modes(y, dt, order=4):
-    """Angular frequencies and damping ratios of the damped modes in y (matrix pencil: the
-    signal's Hankel matrix truncated to `order` singular values, Hua & Sarkar 1990)."""
-    n = len(y)
-    rows = n // 3
-    hankel = np.array([y[i:i + rows + 1] for i in range(n - rows)])
-    v = np.linalg.svd(hankel, full_matrices=False)[2][:order].T
-    z = np.linalg.eigvals(np.linalg.pinv(v[:-1]) @ v[1:]).astype(complex)
-    s = np.log(z) / dt
-    return sorted((abs(q.imag), -q.real / abs(q)) for q in s if q.imag > 0)
 
 
 @pytest.mark.verify

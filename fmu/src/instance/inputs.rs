@@ -1,7 +1,7 @@
 //! What the instance keeps beside the solver: the input values the master set (applied at the
 //! next doStep) and the FMU state snapshots that carry them with the solver's bytes.
 
-use crate::table::{Binding, Causality, Start, Table};
+use crate::table::{Binding, Causality, MotionInput, Mover, Start, Table};
 use sphfmu::coupling::{orientation, BodyKinematics};
 
 /// The inputs of one externally driven body as the master set them. Its orientation is in
@@ -67,6 +67,37 @@ impl BodyInputs {
         })
     }
 
+    /// The numbers of one input (a 2D angular input is the z entry: the slice's last).
+    pub fn field(&self, f: MotionInput, size: usize) -> &[f64] {
+        let all: &[f64] = match f {
+            MotionInput::Position => &self.position,
+            MotionInput::Angle => std::slice::from_ref(&self.angle),
+            MotionInput::Quaternion => &self.quaternion,
+            MotionInput::Matrix => &self.matrix_t,
+            MotionInput::Velocity => &self.velocity,
+            MotionInput::AngularVelocity => &self.angular_velocity,
+            MotionInput::Acceleration => &self.acceleration,
+            MotionInput::AngularAcceleration => &self.angular_acceleration,
+        };
+        &all[all.len() - size..]
+    }
+
+    /// As [`Self::field`], to set.
+    pub fn field_mut(&mut self, f: MotionInput, size: usize) -> &mut [f64] {
+        let all: &mut [f64] = match f {
+            MotionInput::Position => &mut self.position,
+            MotionInput::Angle => std::slice::from_mut(&mut self.angle),
+            MotionInput::Quaternion => &mut self.quaternion,
+            MotionInput::Matrix => &mut self.matrix_t,
+            MotionInput::Velocity => &mut self.velocity,
+            MotionInput::AngularVelocity => &mut self.angular_velocity,
+            MotionInput::Acceleration => &mut self.acceleration,
+            MotionInput::AngularAcceleration => &mut self.angular_acceleration,
+        };
+        let n = all.len();
+        &mut all[n - size..]
+    }
+
     fn numbers(&self) -> impl Iterator<Item = &f64> {
         self.position
             .iter()
@@ -100,8 +131,27 @@ pub(crate) struct Inputs {
     pub gravity: [f64; 3],
     /// Per externally driven body (order of `Table::external_bodies`).
     pub bodies: Vec<BodyInputs>,
+    /// The frame's, when it is driven from outside.
+    pub frame: Option<BodyInputs>,
     /// Per port with an external pressure (order of `Table::external_ports`).
     pub ports: Vec<f64>,
+}
+
+impl Inputs {
+    /// The inputs of a body or the frame.
+    pub fn mover(&self, table: &Table, m: Mover) -> &BodyInputs {
+        match m {
+            Mover::Body(b) => &self.bodies[table.external_index(b)],
+            Mover::Frame => self.frame.as_ref().expect("the table has frame inputs"),
+        }
+    }
+
+    pub fn mover_mut(&mut self, table: &Table, m: Mover) -> &mut BodyInputs {
+        match m {
+            Mover::Body(b) => &mut self.bodies[table.external_index(b)],
+            Mover::Frame => self.frame.as_mut().expect("the table has frame inputs"),
+        }
+    }
 }
 
 /// A saved FMU state: the solver's bytes plus what the instance keeps beside them.
@@ -116,16 +166,15 @@ pub(crate) fn start_inputs(table: &Table) -> Inputs {
     let mut inputs = Inputs {
         gravity: [0.0; 3],
         bodies: vec![BodyInputs::default(); table.external_bodies.len()],
+        frame: table.frame_form.map(|_| BodyInputs::default()),
         ports: vec![0.0; table.external_ports.len()],
     };
     for v in &table.variables {
         if let (Causality::Input, Start::Float(x)) = (v.causality, &v.start) {
             match v.binding {
                 Binding::Gravity => inputs.gravity.copy_from_slice(x),
-                Binding::BodyPosition(b) => {
-                    inputs.bodies[table.external_index(b)]
-                        .position
-                        .copy_from_slice(x);
+                Binding::Motion(m, MotionInput::Position) => {
+                    inputs.mover_mut(table, m).position.copy_from_slice(x);
                 }
                 Binding::PortPressure(k) => inputs.ports[table.external_port_index(k)] = x[0],
                 _ => {}
@@ -143,7 +192,7 @@ const MAGIC: [u8; 8] = *b"sphfmuFS";
 const VERSION: u32 = 2;
 
 impl Snapshot {
-    /// Sealed bytes: gravity, start time, the body count and 29 numbers per body, the port
+    /// Sealed bytes: gravity, start time, the body count and 29 numbers per body, 1 and the frame's 29 numbers or 0, the port
     /// count and one pressure per port (f64 little endian), then the solver's state.
     pub fn serialize(&self) -> Vec<u8> {
         let mut out = Vec::new();
@@ -152,6 +201,10 @@ impl Snapshot {
         put(self.start_time);
         put(self.inputs.bodies.len() as f64);
         for b in &self.inputs.bodies {
+            b.numbers().for_each(|x| put(*x));
+        }
+        put(self.inputs.frame.is_some() as u8 as f64);
+        if let Some(b) = &self.inputs.frame {
             b.numbers().for_each(|x| put(*x));
         }
         put(self.inputs.ports.len() as f64);
@@ -194,13 +247,26 @@ impl Snapshot {
             }
             bodies.push(k);
         }
+        let framed = count(get()?, "frame")?;
+        let mut frame = None;
+        if framed > 1 {
+            return Err("serialized FMU state: damaged frame count".into());
+        }
+        if framed == 1 {
+            let mut k = BodyInputs::default();
+            for x in k.numbers_mut() {
+                *x = get()?;
+            }
+            frame = Some(k);
+        }
         let m = count(get()?, "port")?;
         let ports = (0..m).map(|_| get()).collect::<Result<Vec<_>, _>>()?;
-        let used = 8 * (6 + BODY_NUMBERS * n + m);
+        let used = 8 * (7 + BODY_NUMBERS * (n + framed) + m);
         Ok(Snapshot {
             inputs: Inputs {
                 gravity,
                 bodies,
+                frame,
                 ports,
             },
             start_time,

@@ -9,6 +9,12 @@ mod values;
 use crate::bridge::settings::ZenohSettings;
 use crate::table::{Start, Table};
 use inputs::{start_inputs, Inputs, Snapshot};
+
+/// The kinematics of the externally driven bodies (table order) and of the frame.
+type MasterMotions = (
+    Vec<sphfmu::coupling::BodyKinematics>,
+    Option<sphfmu::coupling::BodyKinematics>,
+);
 use sphfmu::case::Case;
 use sphfmu::coupling::{Coupling, CouplingOptions, StepLimit};
 use std::path::{Path, PathBuf};
@@ -273,21 +279,26 @@ impl Instance {
         Ok(())
     }
 
-    /// The solver's kinematics of every externally driven body from `inputs`, each checked
-    /// as [`Coupling::set_body_kinematics`] would, or the first reason one is refused.
-    fn body_kinematics(
-        &self,
-        c: &Coupling,
-        inputs: &Inputs,
-    ) -> Result<Vec<sphfmu::coupling::BodyKinematics>, String> {
-        let mut out = vec![];
+    /// The solver's kinematics of every externally driven body and of the frame from
+    /// `inputs`, each checked as [`Coupling::set_body_kinematics`] would, or the first reason
+    /// one is refused.
+    fn body_kinematics(&self, c: &Coupling, inputs: &Inputs) -> Result<MasterMotions, String> {
+        let mut bodies = vec![];
         for (k, &b) in self.table.external_bodies.iter().enumerate() {
             let (name, form) = &self.table.external_forms[k];
             let kin = inputs.bodies[k].kinematics(name, *form)?;
             c.check_body_kinematics(b, &kin).map_err(|e| e.0)?;
-            out.push(kin);
+            bodies.push(kin);
         }
-        Ok(out)
+        let frame = match (&inputs.frame, self.table.frame_form) {
+            (Some(f), Some(form)) => {
+                let kin = f.kinematics("frame", form)?;
+                c.check_frame_kinematics(&kin).map_err(|e| e.0)?;
+                Some(kin)
+            }
+            _ => None,
+        };
+        Ok((bodies, frame))
     }
 
     /// Hand the inputs to the solver (it ignores unchanged values). Every input is checked
@@ -296,7 +307,7 @@ impl Instance {
         let c = self.coupling.get().expect("coupling built");
         c.check_gravity(&self.inputs.gravity)
             .map_err(|e| (Status::Error, e.0))?;
-        let bodies = self
+        let (bodies, frame) = self
             .body_kinematics(c, &self.inputs)
             .map_err(|e| (Status::Error, e))?;
         for (k, &p) in self.table.external_ports.iter().enumerate() {
@@ -308,6 +319,10 @@ impl Instance {
             .map_err(|e| (Status::Error, e.0))?;
         for (k, &b) in self.table.external_bodies.iter().enumerate() {
             c.set_body_kinematics(b, &bodies[k])
+                .map_err(|e| (Status::Error, e.0))?;
+        }
+        if let Some(f) = frame {
+            c.set_frame_kinematics(&f)
                 .map_err(|e| (Status::Error, e.0))?;
         }
         for (k, &p) in self.table.external_ports.iter().enumerate() {
@@ -489,6 +504,7 @@ impl Instance {
         )?;
         self.ensure_coupling()?;
         if s.inputs.bodies.len() != self.table.external_bodies.len()
+            || s.inputs.frame.is_some() != self.table.frame_form.is_some()
             || s.inputs.ports.len() != self.table.external_ports.len()
         {
             return err(

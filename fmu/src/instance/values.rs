@@ -3,7 +3,7 @@
 
 use crate::bridge::settings::ZenohParam;
 use crate::instance::{err, CallResult, Instance, Mode, Status};
-use crate::table::{Binding, Causality, Kind, Param};
+use crate::table::{Binding, Causality, Kind, MotionInput, Param};
 
 impl Instance {
     /// Run a multi-variable set so that a rejected value leaves every value as it was.
@@ -49,7 +49,6 @@ impl Instance {
             return err(format!("{name}: must be finite, got {x}"));
         }
         let put = |dst: &mut [f64]| dst[first..first + values.len()].copy_from_slice(values);
-        let ext = |b: usize| self.table.external_index(b);
         match v.binding {
             Binding::Param(Param::Resolution) => {
                 let r = values[0];
@@ -100,38 +99,21 @@ impl Instance {
                 }
                 self.inputs.gravity = g;
             }
-            Binding::BodyPosition(b) => put(&mut self.inputs.bodies[ext(b)].position),
-            Binding::BodyVelocity(b) => put(&mut self.inputs.bodies[ext(b)].velocity),
-            Binding::BodyAngle(b) => self.inputs.bodies[ext(b)].angle = values[0],
-            Binding::BodyQuaternion(b) | Binding::BodyMatrix(b) => {
-                let e = ext(b);
-                let mut body = self.inputs.bodies[e];
-                let quaternion = matches!(v.binding, Binding::BodyQuaternion(_));
-                if quaternion {
-                    put(&mut body.quaternion);
-                } else {
-                    put(&mut body.matrix_t);
-                }
+            Binding::Motion(mover, input) => {
+                let (size, table) = (v.size, &self.table);
+                let mut motion = *self.inputs.mover(table, mover);
+                motion.field_mut(input, size)[first..first + values.len()].copy_from_slice(values);
                 // a whole orientation is checked now; one set element by element (FMI 2.0
                 // scalars) is checked as a whole by the next doStep
-                if values.len() == v.size {
-                    let (name, form) = &self.table.external_forms[e];
-                    body.kinematics(name, *form)
+                if matches!(input, MotionInput::Quaternion | MotionInput::Matrix)
+                    && values.len() == size
+                {
+                    let (name, form) = table.form_of(mover);
+                    motion
+                        .kinematics(name, form)
                         .map_err(|m| (Status::Error, m))?;
                 }
-                self.inputs.bodies[e] = body;
-            }
-            Binding::BodyAcceleration(b) => put(&mut self.inputs.bodies[ext(b)].acceleration),
-            Binding::BodyAngularVelocity(b) | Binding::BodyAngularAcceleration(b) => {
-                // a 2D body's scalar input is the z entry
-                let first = if v.size == 1 { 2 } else { first };
-                let body = &mut self.inputs.bodies[ext(b)];
-                let w = if matches!(v.binding, Binding::BodyAngularVelocity(_)) {
-                    &mut body.angular_velocity
-                } else {
-                    &mut body.angular_acceleration
-                };
-                w[first..first + values.len()].copy_from_slice(values);
+                *self.inputs.mover_mut(table, mover) = motion;
             }
             Binding::PortPressure(k) => {
                 let p = values[0];
@@ -197,7 +179,6 @@ impl Instance {
     pub fn get_f64(&mut self, i: usize) -> CallResult<Vec<f64>> {
         let v = &self.table.variables[i];
         let b = v.binding;
-        let ext = |b: usize| self.table.external_index(b);
         Ok(match b {
             Binding::Time => vec![self.time()],
             Binding::Param(Param::Resolution) => vec![self.params.resolution],
@@ -208,25 +189,11 @@ impl Instance {
                 vec![self.params.zenoh.staleness]
             }
             Binding::Gravity => self.inputs.gravity.to_vec(),
-            Binding::BodyPosition(b) => self.inputs.bodies[ext(b)].position.to_vec(),
-            Binding::BodyVelocity(b) => self.inputs.bodies[ext(b)].velocity.to_vec(),
-            Binding::BodyAngle(b) => vec![self.inputs.bodies[ext(b)].angle],
-            Binding::BodyQuaternion(b) => self.inputs.bodies[ext(b)].quaternion.to_vec(),
-            Binding::BodyMatrix(b) => self.inputs.bodies[ext(b)].matrix_t.to_vec(),
-            Binding::BodyAcceleration(b) => self.inputs.bodies[ext(b)].acceleration.to_vec(),
-            Binding::BodyAngularVelocity(b) | Binding::BodyAngularAcceleration(b) => {
-                let body = &self.inputs.bodies[ext(b)];
-                let w = if matches!(v.binding, Binding::BodyAngularVelocity(_)) {
-                    body.angular_velocity
-                } else {
-                    body.angular_acceleration
-                };
-                if v.size == 1 {
-                    vec![w[2]]
-                } else {
-                    w.to_vec()
-                }
-            }
+            Binding::Motion(mover, input) => self
+                .inputs
+                .mover(&self.table, mover)
+                .field(input, v.size)
+                .to_vec(),
             Binding::PortPressure(k) => vec![self.inputs.ports[self.table.external_port_index(k)]],
             _ => {
                 if v.causality != Causality::Output {

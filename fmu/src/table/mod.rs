@@ -49,14 +49,8 @@ pub enum Binding {
     Time,
     Param(Param),
     Gravity,
-    BodyPosition(usize),
-    BodyAngle(usize),
-    BodyQuaternion(usize),
-    BodyMatrix(usize),
-    BodyVelocity(usize),
-    BodyAngularVelocity(usize),
-    BodyAcceleration(usize),
-    BodyAngularAcceleration(usize),
+    /// Input: one part of the motion of an externally driven body or frame.
+    Motion(Mover, MotionInput),
     BodyForce(usize),
     BodyTorque(usize),
     BodyForceBody(usize),
@@ -81,6 +75,31 @@ pub enum Binding {
     Mass,
     Momentum,
     Energy,
+}
+
+/// What a master moves: case body k, or the case's frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mover {
+    Body(usize),
+    Frame,
+}
+
+/// The parts of a rigid motion a master sets (`sphfmu::coupling::BodyKinematics`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MotionInput {
+    Position,
+    /// 2D and 1D: the angle about z.
+    Angle,
+    /// 3D: a unit quaternion [w, x, y, z].
+    Quaternion,
+    /// 3D: Modelica's R.T, row major.
+    Matrix,
+    Velocity,
+    /// 3D: 3 entries in world axes; 2D: the z entry alone.
+    AngularVelocity,
+    Acceleration,
+    /// As `AngularVelocity`.
+    AngularAcceleration,
 }
 
 /// What a port output reports (see `sphfmu::coupling::PortValue`).
@@ -159,6 +178,8 @@ pub struct Table {
     pub external_bodies: Vec<usize>,
     /// Their names and the form of their orientation input (same order).
     pub external_forms: Vec<(String, crate::instance::inputs::OrientationForm)>,
+    /// The form of the frame's orientation input, when the case's frame is driven from outside.
+    pub frame_form: Option<crate::instance::inputs::OrientationForm>,
     /// Ports whose pressure is set from outside (index into the case's ports).
     pub external_ports: Vec<usize>,
 }
@@ -178,6 +199,20 @@ impl Table {
             .iter()
             .position(|&x| x == body)
             .expect("inputs exist only for externally driven bodies")
+    }
+
+    /// The name and orientation form of a body or the frame driven from outside.
+    pub fn form_of(&self, m: Mover) -> (&str, crate::instance::inputs::OrientationForm) {
+        match m {
+            Mover::Body(b) => {
+                let (name, form) = &self.external_forms[self.external_index(b)];
+                (name, *form)
+            }
+            Mover::Frame => (
+                "frame",
+                self.frame_form.expect("the table has frame inputs"),
+            ),
+        }
     }
 
     /// The FMI 2.0 name of a scalar.
@@ -215,6 +250,18 @@ impl Table {
                     .collect::<Vec<_>>(),
             )
         };
+        let frame = |c: &Case| {
+            c.frame
+                .as_ref()
+                .map(|f| (f.motion == Motion::External, f.orientation))
+        };
+        if frame(packaged) != frame(other) {
+            return Err(format!(
+                "a frame (driven from outside, orientation input) {:?}; the FMU's variables are for {:?}",
+                frame(other),
+                frame(packaged)
+            ));
+        }
         let (a, b) = (sig(packaged), sig(other));
         if a.0 != b.0 {
             return Err(format!(

@@ -102,6 +102,78 @@ impl Rows {
     }
 }
 
+impl Rows {
+    /// The inputs of a rigid motion set from outside (`<n>.position`, its orientation in the
+    /// form the case chose, `.velocity`, `.angular_velocity`, `.acceleration`,
+    /// `.angular_acceleration`); `what` names the mover in descriptions.
+    #[allow(clippy::too_many_arguments)]
+    fn motion_inputs(
+        &mut self,
+        n: &str,
+        what: &str,
+        mover: Mover,
+        d: usize,
+        orientation: OrientationInput,
+        reference: Vec<f64>,
+    ) -> OrientationForm {
+        let m = |input| Binding::Motion(mover, input);
+        self.input(
+            format!("{n}.position"),
+            reference,
+            "m",
+            format!("Position of {what}'s reference point"),
+            m(MotionInput::Position),
+        );
+        let form = match (d, orientation) {
+            (1 | 2, _) => OrientationForm::Angle,
+            (_, OrientationInput::Quaternion) => OrientationForm::Quaternion,
+            (_, OrientationInput::Matrix) => OrientationForm::Matrix,
+        };
+        match form {
+            OrientationForm::Angle => self.input(format!("{n}.angle"), vec![0.0], "rad",
+                format!("Rotation of {what} about z"), m(MotionInput::Angle)),
+            OrientationForm::Quaternion => self.input(format!("{n}.orientation"),
+                sphfmu::coupling::orientation::IDENTITY.to_vec(), "1",
+                format!("Orientation of {what}: unit quaternion [w, x, y, z] turning its axes into world axes (renormalised within 1e-6 of unit length, refused beyond)"),
+                m(MotionInput::Quaternion)),
+            OrientationForm::Matrix => self.input(format!("{n}.T"),
+                vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], "1",
+                format!("Orientation of {what} as Modelica MultiBody's R.T (row major; rows are its axes in world coordinates, v_local = T v_world; orthonormal within 1e-6, det +1)"),
+                m(MotionInput::Matrix)),
+        }
+        self.input(
+            format!("{n}.velocity"),
+            vec![0.0; 3],
+            "m/s",
+            format!("Velocity of {what}'s reference point"),
+            m(MotionInput::Velocity),
+        );
+        let (omega, about) = if d == 3 {
+            (vec![0.0; 3], "in world axes")
+        } else {
+            (vec![0.0], "about z")
+        };
+        self.input(
+            format!("{n}.angular_velocity"),
+            omega.clone(),
+            "rad/s",
+            format!("Angular velocity of {what} {about}"),
+            m(MotionInput::AngularVelocity),
+        );
+        self.input(format!("{n}.acceleration"), vec![0.0; 3], "m/s2",
+            format!("Acceleration of {what}'s reference point over the next step (0: it moves on at constant velocity; a trapezoidal master gives (v1 - v0)/H)"),
+            m(MotionInput::Acceleration));
+        self.input(
+            format!("{n}.angular_acceleration"),
+            omega,
+            "rad/s2",
+            format!("Angular acceleration of {what} {about} over the next step"),
+            m(MotionInput::AngularAcceleration),
+        );
+        form
+    }
+}
+
 impl Table {
     /// The variables of `case` (as packaged; `case_file` is the `case` parameter's start).
     pub fn new(case: &Case, case_file: &str) -> Table {
@@ -194,70 +266,32 @@ impl Table {
                 continue;
             }
             external_bodies.push(i);
-            let n = &b.name;
-            let r = pad3(b.reference.as_deref().unwrap_or(&[]));
-            v.input(
-                format!("{n}.position"),
-                r,
-                "m",
-                format!("Position of body {n}'s reference point"),
-                Binding::BodyPosition(i),
+            let reference = pad3(b.reference.as_deref().unwrap_or(&[]));
+            let form = v.motion_inputs(
+                &b.name,
+                &format!("body {}", b.name),
+                Mover::Body(i),
+                d,
+                b.orientation,
+                reference,
             );
-            let form = match (d, b.orientation) {
-                (1 | 2, _) => OrientationForm::Angle,
-                (_, OrientationInput::Quaternion) => OrientationForm::Quaternion,
-                (_, OrientationInput::Matrix) => OrientationForm::Matrix,
-            };
-            external_forms.push((n.clone(), form));
-            match form {
-                OrientationForm::Angle => v.input(
-                    format!("{n}.angle"),
-                    vec![0.0],
-                    "rad",
-                    format!("Rotation of body {n} about z"),
-                    Binding::BodyAngle(i),
-                ),
-                OrientationForm::Quaternion => v.input(
-                    format!("{n}.orientation"),
-                    sphfmu::coupling::orientation::IDENTITY.to_vec(),
-                    "1",
-                    format!("Orientation of body {n}: unit quaternion [w, x, y, z] turning body axes into world axes (renormalised within 1e-6 of unit length, refused beyond)"),
-                    Binding::BodyQuaternion(i),
-                ),
-                OrientationForm::Matrix => v.input(
-                    format!("{n}.T"),
-                    vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
-                    "1",
-                    format!("Orientation of body {n} as Modelica MultiBody's R.T (row major; rows are the body axes in world coordinates, v_body = T v_world; orthonormal within 1e-6, det +1)"),
-                    Binding::BodyMatrix(i),
-                ),
-            }
-            v.input(format!("{n}.velocity"), vec![0.0; 3], "m/s",
-                format!("Velocity of body {n}'s reference point (the body moves on with it until the next step)"),
-                Binding::BodyVelocity(i));
-            let (omega, about) = if d == 3 {
-                (vec![0.0; 3], "in world axes")
-            } else {
-                (vec![0.0], "about z")
-            };
-            v.input(
-                format!("{n}.angular_velocity"),
-                omega.clone(),
-                "rad/s",
-                format!("Angular velocity of body {n} {about}"),
-                Binding::BodyAngularVelocity(i),
-            );
-            v.input(format!("{n}.acceleration"), vec![0.0; 3], "m/s2",
-                format!("Acceleration of body {n}'s reference point over the next step (0: it moves on at constant velocity; a trapezoidal master gives (v1 - v0)/H)"),
-                Binding::BodyAcceleration(i));
-            v.input(
-                format!("{n}.angular_acceleration"),
-                omega,
-                "rad/s2",
-                format!("Angular acceleration of body {n} {about} over the next step"),
-                Binding::BodyAngularAcceleration(i),
-            );
+            external_forms.push((b.name.clone(), form));
         }
+        let frame_form = case
+            .frame
+            .as_ref()
+            .filter(|f| f.motion == Motion::External)
+            .map(|f| {
+                let reference = pad3(f.reference.as_deref().unwrap_or(&[]));
+                v.motion_inputs(
+                    "frame",
+                    "the frame",
+                    Mover::Frame,
+                    d,
+                    f.orientation,
+                    reference,
+                )
+            });
         for (i, b) in case.bodies.iter().enumerate() {
             let n = &b.name;
             v.output(
@@ -485,6 +519,7 @@ impl Table {
             dimension: d,
             external_bodies,
             external_forms,
+            frame_form,
             external_ports,
         }
     }

@@ -42,17 +42,20 @@ pub const UNITS: &[(&str, [i32; 3])] = &[
 /// square metre, so they carry that in the name (`ForcePerDepth`), as in the unit (`N/m`):
 /// a tool must not connect a 2D force to a 3D model's force without the depth.
 pub(crate) fn quantity(binding: &crate::table::Binding, dimension: usize) -> Option<String> {
-    use crate::table::{Binding as B, Param, PortOutput as P};
+    use crate::table::{Binding as B, MotionInput as M, Param, PortOutput as P};
     let (name, extensive) = match binding {
         B::Time | B::Dt | B::Param(Param::OutputInterval) => ("Time", false),
         B::Gravity => ("Acceleration", false),
-        B::BodyPosition(_) => ("Length", false),
-        B::BodyAngle(_) => ("Angle", false),
-        B::BodyQuaternion(_) | B::BodyMatrix(_) => ("Orientation", false),
-        B::BodyVelocity(_) | B::ProbeVelocity(_) | B::Port(_, P::Velocity) => ("Velocity", false),
-        B::BodyAngularVelocity(_) => ("AngularVelocity", false),
-        B::BodyAcceleration(_) => ("Acceleration", false),
-        B::BodyAngularAcceleration(_) => ("AngularAcceleration", false),
+        B::Motion(_, m) => match m {
+            M::Position => ("Length", false),
+            M::Angle => ("Angle", false),
+            M::Quaternion | M::Matrix => ("Orientation", false),
+            M::Velocity => ("Velocity", false),
+            M::AngularVelocity => ("AngularVelocity", false),
+            M::Acceleration => ("Acceleration", false),
+            M::AngularAcceleration => ("AngularAcceleration", false),
+        },
+        B::ProbeVelocity(_) | B::Port(_, P::Velocity) => ("Velocity", false),
         B::BodyForce(_) | B::BodyForceBody(_) | B::PatchForce(_) => ("Force", true),
         B::BodyTorque(_) | B::BodyTorqueBody(_) => ("Torque", true),
         B::ProbeDensity(_) => ("Density", false),
