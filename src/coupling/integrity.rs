@@ -178,7 +178,7 @@ pub(super) fn check<const D: usize>(s: &Saved<D>, c: &Coupled<D>) -> Result<(), 
         (None, None) => {}
         (Some(h), Some(_)) => {
             pose_ok("frame pose", &h.pose)?;
-            all_finite("frame pose", [&h.time].into_iter())?;
+            all_finite("frame pose", [&h.time])?;
         }
         _ => return Err("the frame: the state and the case disagree on having one".into()),
     }
@@ -216,7 +216,7 @@ pub(super) fn check<const D: usize>(s: &Saved<D>, c: &Coupled<D>) -> Result<(), 
         }
         pose_ok(&format!("{what} pose"), &b.pose)?;
         pose_ok(&format!("{what} pose"), &b.held.pose)?;
-        all_finite(&format!("{what} pose"), [&b.held.time].into_iter())?;
+        all_finite(&format!("{what} pose"), [&b.held.time])?;
         all_finite(
             &format!("{what} loads"),
             b.reference
