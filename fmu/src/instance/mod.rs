@@ -9,15 +9,15 @@ mod values;
 use crate::bridge::settings::ZenohSettings;
 use crate::table::{Start, Table};
 use inputs::{start_inputs, Inputs, Snapshot};
+use sphfmu::case::Case;
+use sphfmu::coupling::{Coupling, CouplingOptions, StepLimit};
+use std::path::{Path, PathBuf};
 
 /// The kinematics of the externally driven bodies (table order) and of the frame.
 type MasterMotions = (
     Vec<sphfmu::coupling::BodyKinematics>,
     Option<sphfmu::coupling::BodyKinematics>,
 );
-use sphfmu::case::Case;
-use sphfmu::coupling::{Coupling, CouplingOptions, StepLimit};
-use std::path::{Path, PathBuf};
 
 /// FMI status codes (the same numbers in FMI 2.0 and 3.0).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]

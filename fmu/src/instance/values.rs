@@ -102,7 +102,7 @@ impl Instance {
             Binding::Motion(mover, input) => {
                 let (size, table) = (v.size, &self.table);
                 let mut motion = *self.inputs.mover(table, mover);
-                motion.field_mut(input, size)[first..first + values.len()].copy_from_slice(values);
+                put(motion.field_mut(input, size));
                 // a whole orientation is checked now; one set element by element (FMI 2.0
                 // scalars) is checked as a whole by the next doStep
                 if matches!(input, MotionInput::Quaternion | MotionInput::Matrix)
