@@ -231,26 +231,53 @@ impl Shape {
         }
     }
 
-    /// Wall particle positions: lattice points (spacing `dx`, cell centres aligned with
-    /// `origin`) with −thickness ≤ φ < 0.
-    pub fn wall_points<const D: usize>(
+    /// The wall lattice of the shape: its spacing per axis and the origin its cell centres
+    /// are aligned with (x = origin + (i + ½) spacing). A box-like shape (tank, closed box,
+    /// block) aligns with its own faces, its spacing per axis set so that a whole number of
+    /// cells spans it (the nearest to `dx`): every face then has its first wall layer half a
+    /// spacing behind it, on both sides of the box, whatever the fluid's lattice (with one
+    /// spacing and the fluid's origin, a box that is no whole number of spacings long gets a
+    /// wider gap on one side than on the other: a lopsided wall push). Other shapes take `dx`
+    /// and `origin` as they are.
+    pub fn wall_lattice<const D: usize>(
         &self,
         dx: f64,
+        origin: &Vector<D>,
+    ) -> (Vector<D>, Vector<D>) {
+        match self {
+            Shape::Tank { min, max }
+            | Shape::ClosedBox { min, max }
+            | Shape::Block { min, max } => {
+                let spacing = Vector::<D>::from_fn(|k, _| {
+                    let len = max[k] - min[k];
+                    len / (len / dx).round().max(1.0)
+                });
+                (spacing, v::<D>(min))
+            }
+            _ => (Vector::<D>::repeat(dx), *origin),
+        }
+    }
+
+    /// Wall particle positions: lattice points (spacing `dx` per axis, cell centres aligned
+    /// with `origin`) with −thickness ≤ φ < 0.
+    pub fn wall_points<const D: usize>(
+        &self,
+        dx: &Vector<D>,
         origin: &Vector<D>,
         thickness: f64,
     ) -> Vec<Vector<D>> {
         let (lo, hi) = self.bounds::<D>(thickness);
         // first and last lattice index per axis: x = origin + (i + ½) dx
         let first: Vec<i64> = (0..D)
-            .map(|k| ((lo[k] - origin[k]) / dx - 0.5).floor() as i64)
+            .map(|k| ((lo[k] - origin[k]) / dx[k] - 0.5).floor() as i64)
             .collect();
         let last: Vec<i64> = (0..D)
-            .map(|k| ((hi[k] - origin[k]) / dx - 0.5).ceil() as i64)
+            .map(|k| ((hi[k] - origin[k]) / dx[k] - 0.5).ceil() as i64)
             .collect();
         let mut out = Vec::new();
         let mut idx = first.clone();
         'outer: loop {
-            let x = Vector::<D>::from_fn(|k, _| origin[k] + (idx[k] as f64 + 0.5) * dx);
+            let x = Vector::<D>::from_fn(|k, _| origin[k] + (idx[k] as f64 + 0.5) * dx[k]);
             let phi = self.distance(&x);
             if phi < 0.0 && phi >= -thickness {
                 out.push(x);
@@ -279,7 +306,7 @@ mod tests {
             max: vec![1.0, 0.5],
         };
         let dx = 0.05;
-        let pts = tank.wall_points::<2>(dx, &Vector::<2>::zeros(), 3.0 * dx);
+        let pts = tank.wall_points::<2>(&Vector::<2>::repeat(dx), &Vector::<2>::zeros(), 3.0 * dx);
         // floor: 3 layers under [−3dx, 1+3dx] (26 columns); side walls: 3 layers × 10 rows
         // each; less the outermost corner point on each side, 2.5√2 dx > 3dx from the corner
         // (it is beyond every fluid particle's support too)

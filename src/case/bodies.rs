@@ -139,13 +139,15 @@ pub(super) fn add_bodies<const D: usize>(
                 _ => 0.0,
             })
             .unwrap_or(0.0);
-        let pts = b.shape.wall_points::<D>(dx, origin, thickness);
+        let (lattice, aligned) = b.shape.wall_lattice::<D>(dx, origin);
+        let pts = b.shape.wall_points::<D>(&lattice, &aligned, thickness);
         if pts.is_empty() {
             return Err(CaseError(format!(
                 "{key}.shape: no wall particle fits (spacing {dx}); the shape is thinner than the lattice"
             )));
         }
-        let mass = rho * dx.powi(D as i32) / factor;
+        let volume = lattice.iter().product::<f64>() / factor;
+        let mass = rho * volume;
         for x in pts {
             p.push(mass, x, Vector::zeros(), u, rho, h, 1000 + bi as u16);
             let last = p.len() - 1;
@@ -170,7 +172,7 @@ pub(super) fn add_bodies<const D: usize>(
             pose: Pose::default(),
             force: Vector::zeros(),
             torque: [0.0; 3],
-            particle_volume: dx.powi(D as i32) / factor,
+            particle_volume: volume,
             spacing: dx,
             impulse: Vector::zeros(),
             angular_impulse: [0.0; 3],
