@@ -26,21 +26,22 @@ def session(name, **args):
 
 def test_a_rolled_and_pitched_box_carries_the_hydrostatic_loads_of_level_water():
     # roll 0.12 rad and pitch 0.08 rad together over 0.6 s, hold to 1.5 s, average the loads
-    # over the last 0.55 s (about one period of the first sloshing mode, 0.55 s)
+    # over the last 0.55 s (about one period of the first sloshing mode, 0.55 s); at FMU
+    # resolution 0.8 (1.25 cm, 37 s on 2 cores; at 1 cm, 112 s: torques within 0.4 % and 1.2 %)
     r = session("tilted_box", fmu_path=str(BOX), roll=0.12, pitch=0.08, ramp=0.6, t_end=1.5,
-                window=0.55, dt=0.01, resolution=1.0)
+                window=0.55, dt=0.01, resolution=0.8)
     assert r["finite"]
     weight = -r["expected_force"][2]
     force, torque = np.array(r["force"]), np.array(r["torque"])
     expected, frozen = np.array(r["expected_torque"]), np.array(r["frozen_torque"])
-    # measured: vertical force within 4e-5 of the weight, horizontal 4e-4 of it
+    # measured: vertical force within 6e-5 of the weight, horizontal 3e-4 of it
     assert abs(force[2] + weight) < 1e-3 * weight, r
     assert np.abs(force[:2]).max() < 2e-3 * weight, r
-    # measured: roll and pitch torques within 0.4 % and 1.2 % of the level water's; water that
+    # measured: roll and pitch torques within 1.6 % and 1.1 % of the level water's; water that
     # kept its place in the box (no level surface) would give 3.4 times as much
     assert np.abs(torque - expected).max() < 0.03 * np.abs(expected).max(), r
     assert np.abs(frozen - expected).max() > 10 * np.abs(torque - expected).max(), r
-    # body-axes loads are the world loads turned by the box's orientation (measured 1e-16)
+    # body-axes loads are the world loads turned by the box's orientation (measured 3e-17)
     assert r["body_frame_error"] < 1e-14, r
 
 
