@@ -22,8 +22,8 @@ build:
 # under target/fmu/slosh2d/, and the 3D box driven in six degrees of freedom under
 # target/fmu/box3d/ (orientation as a quaternion) and target/fmu/box3d-matrix/ (as Modelica's
 # R.T), and the light piston under a water column (strong coupling) under
-# target/fmu/added-mass2d/ and the tuned liquid damper under target/fmu/tld2d/ (the tests
-# use them all). `make fmu FMU_CASE=models/x.toml` also
+# target/fmu/added-mass2d/, the tuned liquid damper under target/fmu/tld2d/ and the pitched 3D
+# tank under target/fmu/pitch3d/ (the tests use them all; `make verify` the last two). `make fmu FMU_CASE=models/x.toml` also
 # packages x under target/fmu/<its case name>/ and leaves the others alone. `cargo build
 # --workspace` also builds the zenoh node sphfmu-serve (`sphfmu serve`).
 DEMO_CASE := models/free-piston2d.toml
@@ -40,6 +40,7 @@ fmu:
 	$(PACKAGE) --case models/box3d.toml --set 'body.0.orientation="matrix"' --out target/fmu/box3d-matrix
 	$(PACKAGE) --case models/added-mass2d.toml --out target/fmu/added-mass2d
 	$(PACKAGE) --case models/tld2d.toml --out target/fmu/tld2d
+	$(PACKAGE) --case models/pitch3d.toml --out target/fmu/pitch3d
 	$(if $(FMU_CASE),$(PACKAGE) --case $(FMU_CASE))
 
 # Main job: build the FMU and co-simulate a free piston on a gas spring with a Python master
