@@ -224,6 +224,10 @@ def session_bad_calls(fmu_path):
     fmu.exitInitializationMode()
     out["nan_gravity"] = expect_error(lambda: fmu.setFloat64([vr["gravity"]], [float("nan"), 0.0, 0.0]))
     out["gravity_z_in_2d"] = expect_error(lambda: fmu.setFloat64([vr["gravity"]], [0.0, 0.0, -9.81]))
+    # a 2D body's angular velocity is a scalar about z: a 3-vector with x/y is refused
+    out["omega_3d_in_2d"] = expect_error(
+        lambda: fmu.setFloat64([vr["piston.angular_velocity"]], [0.5, 0.0, 1.0]))
+    out["omega_kept"] = list(fmu.getFloat64([vr["piston.angular_velocity"]]))
     out["inf_position"] = expect_error(
         lambda: fmu.setFloat64([vr["piston.position"]], [float("inf"), 0.1, 0.0]))
     out["set_output"] = expect_error(lambda: fmu.setFloat64([vr["piston.force"]], [0.0, 0.0, 0.0]))

@@ -170,19 +170,21 @@ def test_free_piston_master_finds_the_gas_spring_frequency():
 def test_bad_calls_return_errors_with_a_log_line_and_the_process_survives():
     r = session("bad_calls", fmu_path=str(FMU3))
     for k in ["step_before_init", "threads_out_of_range", "resolution_out_of_range", "nan_gravity",
-              "gravity_z_in_2d", "inf_position", "set_output", "param_in_step_mode",
+              "gravity_z_in_2d", "omega_3d_in_2d", "inf_position", "set_output", "param_in_step_mode",
               "negative_step", "wrong_time", "wrong_nvalues", "unknown_vr",
               "step_after_terminate", "unknown_case", "other_interface", "unknown_scheme"]:
         assert r[k] == 3, (k, r[k])
     assert r["alive"]
     assert r["gravity_kept"] == [0.0, 0.0, 0.0], "a rejected input must not change the input"
+    assert r["omega_kept"] == [0.0]
     assert abs(r["after_errors"] - 0.2) < 0.01
     log = "\n".join(r["log"])
     for needle in ["doStep: not allowed in state Instantiated", "gravity: must be finite, got NaN",
                    "gravity[3]: must be 0 in a 2D case", "communicationStepSize must be finite and > 0",
                    "currentCommunicationPoint 5 is not the FMU's time 0",
                    "no-such-case.toml: cannot read", "unknown preset \"sph2000\"",
-                   "not allowed in state Terminated", "threads: must be in [0, 1024]"]:
+                   "not allowed in state Terminated", "threads: must be in [0, 1024]",
+                   "piston.angular_velocity about z only: a 2D body turns about z alone"]:
         assert needle in log, needle
 
 

@@ -7,7 +7,7 @@
 use crate::abi::ffi::{bad, slice, slice_mut, text, with, Fmu};
 use crate::abi::state_ffi;
 use crate::instance::{CallResult, Instance, Status};
-use crate::table::Kind;
+use crate::table::{Binding, Kind, MotionInput};
 use std::ffi::{c_char, c_void, CString};
 use std::path::Path;
 
@@ -31,9 +31,35 @@ fn float_spans(
         at += size;
     }
     if at != n_values {
+        // a master that speaks 3-vectors may hand a 2D body a 3D angular velocity: say why
+        // the variable is a scalar
+        let planar: Vec<&str> = spans
+            .iter()
+            .map(|(i, _)| &inst.table.variables[*i])
+            .filter(|v| {
+                v.size == 1
+                    && matches!(
+                        v.binding,
+                        Binding::Motion(
+                            _,
+                            MotionInput::AngularVelocity | MotionInput::AngularAcceleration
+                        )
+                    )
+            })
+            .map(|v| v.name.as_str())
+            .collect();
+        let hint = if planar.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " ({} about z only: a {}D body turns about z alone, so x/y components cannot be given)",
+                planar.join(", "),
+                inst.table.dimension
+            )
+        };
         return Err((
             Status::Error,
-            format!("nValues = {n_values} but the variables hold {at}"),
+            format!("nValues = {n_values} but the variables hold {at}{hint}"),
         ));
     }
     Ok(spans)
