@@ -78,12 +78,10 @@ impl<const D: usize> Body<D> {
     /// master applies to a body frame.
     pub fn loads_in_body_frame(&self) -> (Vector<D>, nalgebra::Vector3<f64>) {
         let t = nalgebra::Vector3::from(self.torque);
-        let t = if D < 2 {
-            t
-        } else {
-            self.pose.rotation.inverse_transform_vector(&t)
-        };
-        (self.pose.to_body(&self.force), t)
+        (
+            self.pose.to_body(&self.force),
+            self.pose.rotation.inverse_transform_vector(&t),
+        )
     }
 }
 

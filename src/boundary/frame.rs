@@ -2,19 +2,19 @@
 //! moving a tank's walls through the box, the whole computation stays in the tank's frame,
 //! which moves with a prescribed motion or one a master sets (`motion = external`: any 3D
 //! pose, with the accelerations held over a step), a translation d(t) of its reference point
-//! and a rotation R(t) (`boundary::kinematics`). Every particle then feels, besides the inertial gravity g, the
-//! fictitious accelerations of a frame with origin acceleration A = d̈ and angular velocity
-//! Ω (e.g. Landau & Lifshitz, Mechanics §39):
+//! and a rotation R(t) (`boundary::kinematics`). Every particle then feels, besides the
+//! inertial gravity g, the fictitious accelerations of a frame with origin acceleration
+//! A = d̈ and angular velocity Ω (e.g. Landau & Lifshitz, Mechanics §39):
 //!
 //!   a = −∇P/ρ + Rᵀ(g − A) − Ω̇ × r − 2 Ω × v − Ω × (Ω × r),
 //!
 //! with r = x − reference and v the velocity in the frame, Rᵀ turning inertial vectors into
 //! frame coordinates, and Ω = Rᵀω, Ω̇ = Rᵀω̇ the world angular velocity and acceleration in
 //! frame coordinates (d/dt (Rᵀω) = Rᵀω̇, since Ṙᵀω = −Rᵀ(ω × ω) = 0). The terms hold for
-//! any 3D pose; a prescribed motion turns about one axis, where Rᵀω = ω. Positions, velocities, forces and torques on bodies are all
-//! reported in frame coordinates. The wall condition's hydrostatic term (Adami et al. 2012,
-//! eq. 27) uses the same effective body force at the wall particle.
-
+//! any 3D pose; a prescribed motion turns about one axis, where Rᵀω = ω. Positions,
+//! velocities, forces and torques on bodies are all reported in frame coordinates. The wall
+//! condition's hydrostatic term (Adami et al. 2012, eq. 27) uses the same effective body
+//! force at the wall particle.
 use super::kinematics::{from3, to3, HeldPose, Motion, Pose};
 use crate::case::bodies::OrientationInput;
 use crate::particles::Vector;

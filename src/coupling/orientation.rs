@@ -22,6 +22,9 @@ pub const UNIT_TOLERANCE: f64 = 1e-6;
 /// The identity orientation [w, x, y, z].
 pub const IDENTITY: [f64; 4] = [1.0, 0.0, 0.0, 0.0];
 
+/// The identity orientation as Modelica's `R.T`, row major.
+pub const IDENTITY_T: [f64; 9] = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+
 fn finite(key: &str, v: &[f64]) -> Result<(), String> {
     match v.iter().find(|x| !x.is_finite()) {
         Some(x) => Err(format!("{key}: entries must be finite, got {x}")),

@@ -9,35 +9,18 @@ import json
 import sys
 
 import numpy as np
-from fmu_sessions import LOG, expect_error, open_fmu
+from fmu_sessions import LOG, ROOT, expect_error, open_fmu
+
+sys.path.insert(0, str(ROOT / "tools"))
+from strong_coupling import exp_rot, log_rot, quaternion  # noqa: E402
 
 
 def rot_x(a):
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+    return exp_rot(np.array([a, 0.0, 0.0]))
 
 
 def rot_y(a):
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
-
-
-def quaternion(r):
-    """[w, x, y, z] of rotation matrix r (body -> world), w >= 0."""
-    w = np.sqrt(max(0.0, 1.0 + np.trace(r))) / 2.0
-    x = np.copysign(np.sqrt(max(0.0, 1.0 + r[0, 0] - r[1, 1] - r[2, 2])) / 2.0, r[2, 1] - r[1, 2])
-    y = np.copysign(np.sqrt(max(0.0, 1.0 - r[0, 0] + r[1, 1] - r[2, 2])) / 2.0, r[0, 2] - r[2, 0])
-    z = np.copysign(np.sqrt(max(0.0, 1.0 - r[0, 0] - r[1, 1] + r[2, 2])) / 2.0, r[1, 0] - r[0, 1])
-    return [float(w), float(x), float(y), float(z)]
-
-
-def rotation_vector(r):
-    """The rotation vector (axis times angle) of rotation matrix r."""
-    angle = np.arccos(np.clip((np.trace(r) - 1.0) / 2.0, -1.0, 1.0))
-    if angle < 1e-15:
-        return np.zeros(3)
-    axis = np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]]) / (2.0 * np.sin(angle))
-    return axis * angle
+    return exp_rot(np.array([0.0, a, 0.0]))
 
 
 def tilt(t, roll, pitch, ramp):
@@ -94,7 +77,7 @@ def session_tilted_box(fmu_path, roll, pitch, ramp, t_end, window, dt, resolutio
         r0, r1 = tilt(t0, roll, pitch, ramp), tilt(t1, roll, pitch, ramp)
         q = quaternion(r0)
         turning = t0 < ramp
-        w = rotation_vector(r1 @ r0.T) / dt if turning else np.zeros(3)
+        w = log_rot(r1 @ r0.T) / dt if turning else np.zeros(3)
         fmu.setFloat64([vr["box.orientation"]], q)
         fmu.setFloat64([vr["box.angular_velocity"]], list(w))
         fmu.doStep(t0, dt)

@@ -28,7 +28,7 @@ impl Default for BodyInputs {
             velocity: [0.0; 3],
             angle: 0.0,
             quaternion: orientation::IDENTITY,
-            matrix_t: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+            matrix_t: orientation::IDENTITY_T,
             angular_velocity: [0.0; 3],
             acceleration: [0.0; 3],
             angular_acceleration: [0.0; 3],

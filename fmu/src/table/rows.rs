@@ -137,7 +137,7 @@ impl Rows {
                 format!("Orientation of {what}: unit quaternion [w, x, y, z] turning its axes into world axes (renormalised within 1e-6 of unit length, refused beyond)"),
                 m(MotionInput::Quaternion)),
             OrientationForm::Matrix => self.input(format!("{n}.T"),
-                vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], "1",
+                sphfmu::coupling::orientation::IDENTITY_T.to_vec(), "1",
                 format!("Orientation of {what} as Modelica MultiBody's R.T (row major; rows are its axes in world coordinates, v_local = T v_world; orthonormal within 1e-6, det +1)"),
                 m(MotionInput::Matrix)),
         }
