@@ -5,6 +5,37 @@ use nalgebra::SVector;
 /// A D-vector of f64.
 pub type Vector<const D: usize> = SVector<f64, D>;
 
+/// Apply `op` to every fixed per-particle field, either pairwise (`a` = `&from.field`, `b` =
+/// `&mut to.field`) or on one set (`b` = `&mut to.field`): the one list of fields that
+/// selection, appending, overwriting and truncation share, so a new field cannot be
+/// forgotten in one of them. The extra scheme fields are handled by the callers.
+macro_rules! for_each_field {
+    ($from:expr, $to:expr, |$a:ident, $b:ident| $op:expr) => {
+        for_each_field!(@list (pair $from, $to, $a, $b, $op))
+    };
+    ($to:expr, |$b:ident| $op:expr) => {
+        for_each_field!(@list (one $to, $b, $op))
+    };
+    (@list $args:tt) => {
+        for_each_field!(@each $args; mass pos vel u rho pressure sound_speed h material id
+            frozen body port drive rest acc dudt drhodt omega div_v curl_v v_sig alpha vel_wall
+            wall_force)
+    };
+    (@each (pair $from:expr, $to:expr, $a:ident, $b:ident, $op:expr); $($f:ident)*) => {{
+        $({
+            let $a = &$from.$f;
+            let $b = &mut $to.$f;
+            $op;
+        })*
+    }};
+    (@each (one $to:expr, $b:ident, $op:expr); $($f:ident)*) => {{
+        $({
+            let $b = &mut $to.$f;
+            $op;
+        })*
+    }};
+}
+
 /// Per-particle state. Evolved fields (x, v, u) and the fields every scheme derives each
 /// evaluation; schemes that need more register `extra_scalars` / `extra_vectors` slots, which
 /// move with the particles when they are reordered.
@@ -127,41 +158,74 @@ impl<const D: usize> Particles<D> {
     /// Reorder every per-particle array so that new index i holds old index `perm[i]`. `perm`
     /// may also repeat or leave out indices (the ports create and delete particles this way).
     pub fn permute(&mut self, perm: &[u32]) {
-        fn ap<T: Copy>(v: &mut Vec<T>, perm: &[u32]) {
-            let out: Vec<T> = perm.iter().map(|&i| v[i as usize]).collect();
-            *v = out;
+        *self = self.selected(perm);
+    }
+
+    /// The particles `pick` names, in that order (repeats allowed), with every field.
+    pub fn selected(&self, pick: &[u32]) -> Self {
+        fn sel<T: Copy>(v: &[T], pick: &[u32]) -> Vec<T> {
+            pick.iter().map(|&i| v[i as usize]).collect()
         }
-        ap(&mut self.mass, perm);
-        ap(&mut self.pos, perm);
-        ap(&mut self.vel, perm);
-        ap(&mut self.u, perm);
-        ap(&mut self.rho, perm);
-        ap(&mut self.pressure, perm);
-        ap(&mut self.sound_speed, perm);
-        ap(&mut self.h, perm);
-        ap(&mut self.material, perm);
-        ap(&mut self.id, perm);
-        ap(&mut self.frozen, perm);
-        ap(&mut self.body, perm);
-        ap(&mut self.port, perm);
-        ap(&mut self.drive, perm);
-        ap(&mut self.rest, perm);
-        ap(&mut self.acc, perm);
-        ap(&mut self.dudt, perm);
-        ap(&mut self.drhodt, perm);
-        ap(&mut self.omega, perm);
-        ap(&mut self.div_v, perm);
-        ap(&mut self.curl_v, perm);
-        ap(&mut self.v_sig, perm);
-        ap(&mut self.alpha, perm);
-        ap(&mut self.vel_wall, perm);
-        ap(&mut self.wall_force, perm);
-        for s in &mut self.extra_scalars {
-            ap(s, perm);
+        let mut out = Self::default();
+        for_each_field!(self, out, |a, b| *b = sel(a, pick));
+        out.extra_scalars = self.extra_scalars.iter().map(|s| sel(s, pick)).collect();
+        out.extra_vectors = self.extra_vectors.iter().map(|s| sel(s, pick)).collect();
+        out
+    }
+
+    /// Append every particle of `other`, which must carry the same extra fields.
+    pub fn append(&mut self, other: &Self) -> Result<(), String> {
+        self.check_same_fields(other)?;
+        for_each_field!(other, self, |a, b| b.extend_from_slice(a));
+        for (s, o) in self.extra_scalars.iter_mut().zip(&other.extra_scalars) {
+            s.extend_from_slice(o);
         }
-        for s in &mut self.extra_vectors {
-            ap(s, perm);
+        for (s, o) in self.extra_vectors.iter_mut().zip(&other.extra_vectors) {
+            s.extend_from_slice(o);
         }
+        Ok(())
+    }
+
+    /// Overwrite particles `start..start + other.len()` with `other`'s, every field.
+    pub fn overwrite(&mut self, start: usize, other: &Self) -> Result<(), String> {
+        self.check_same_fields(other)?;
+        let end = start + other.len();
+        if end > self.len() {
+            return Err(format!(
+                "overwrite of particles {start}..{end} past the end ({})",
+                self.len()
+            ));
+        }
+        for_each_field!(other, self, |a, b| b[start..end].copy_from_slice(a));
+        for (s, o) in self.extra_scalars.iter_mut().zip(&other.extra_scalars) {
+            s[start..end].copy_from_slice(o);
+        }
+        for (s, o) in self.extra_vectors.iter_mut().zip(&other.extra_vectors) {
+            s[start..end].copy_from_slice(o);
+        }
+        Ok(())
+    }
+
+    /// Keep the first `n` particles.
+    pub fn truncate(&mut self, n: usize) {
+        for_each_field!(self, |b| b.truncate(n));
+        self.extra_scalars.iter_mut().for_each(|s| s.truncate(n));
+        self.extra_vectors.iter_mut().for_each(|s| s.truncate(n));
+    }
+
+    fn check_same_fields(&self, other: &Self) -> Result<(), String> {
+        if self.extra_scalars.len() != other.extra_scalars.len()
+            || self.extra_vectors.len() != other.extra_vectors.len()
+        {
+            return Err(format!(
+                "particles with {}/{} extra scalar/vector fields cannot join particles with {}/{}",
+                other.extra_scalars.len(),
+                other.extra_vectors.len(),
+                self.extra_scalars.len(),
+                self.extra_vectors.len()
+            ));
+        }
+        Ok(())
     }
 
     /// Zero the derivatives of frozen particles (after every evaluation), so no integrator

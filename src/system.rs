@@ -109,6 +109,14 @@ pub struct System<const D: usize> {
     /// the canonical momentum S and energy ε per baryon that the integrator evolves in place
     /// of v and u, and their Lorentz factors. `None` in Newtonian runs.
     pub relativistic: Option<crate::scheme::rosswog::sr::SrSlots>,
+    /// Neighbour rows in the order of the particles' stable ids (not of their indices), so
+    /// that every per-particle sum is the same whatever the numbering: the distributed run
+    /// (`parallel`) sets it, and its particles then match bit for bit on any number of ranks.
+    pub canonical_order: bool,
+    /// The last `halo` particles are copies of other ranks' particles (`parallel::halo`):
+    /// evaluated with the rest, but neither stepped for the time step, counted in the totals
+    /// nor checked; 0 in a single-process run.
+    pub halo: usize,
 }
 
 /// A neighbour list with a skin, the positions and radii it was built for.
@@ -133,6 +141,11 @@ impl<const D: usize> Default for VerletList<D> {
 }
 
 impl<const D: usize> System<D> {
+    /// How many particles this process owns (all but the halo copies at the end).
+    pub fn owned(&self) -> usize {
+        self.particles.len() - self.halo
+    }
+
     /// Make the master (Verlet) list valid for the current positions and return, per
     /// particle, the largest h it can serve exactly.
     ///
@@ -195,6 +208,13 @@ impl<const D: usize> System<D> {
                     .collect();
             self.grid = CellGrid::build(&p.pos, &self.domain, &v.reach);
             v.list = NeighbourList::build(&p.pos, &v.reach, &self.domain, &self.grid);
+            if self.canonical_order {
+                let id = &p.id;
+                v.list.sort_rows_by(|e| {
+                    let (b, code) = unpack(e);
+                    (id[b], code)
+                });
+            }
             v.pos.clone_from(&p.pos);
             v.builds += 1;
             disp.iter_mut().for_each(|d| *d = 0.0);

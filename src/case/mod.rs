@@ -441,6 +441,8 @@ impl Case {
             evolve_density: false,
             wall_pairs: false,
             relativistic: None,
+            canonical_order: false,
+            halo: 0,
             frame: self.frame.as_ref().map(|f| f.build::<D>()),
             ports,
             drives: self.drives::<D>()?,

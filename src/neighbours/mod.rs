@@ -209,6 +209,21 @@ impl NeighbourList {
         })
     }
 
+    /// Sort every row by `key(entry)` (in parallel by rows): rows in an order that does not
+    /// depend on how the particles are numbered make every per-particle sum independent of
+    /// it (the distributed run sorts by the particles' stable ids, see `parallel`).
+    pub fn sort_rows_by<K: Ord>(&mut self, key: impl Fn(u32) -> K + Sync) {
+        let offsets = &self.offsets;
+        let mut rows: Vec<&mut [u32]> = Vec::with_capacity(offsets.len().saturating_sub(1));
+        let mut rest = self.entries.as_mut_slice();
+        for w in offsets.windows(2) {
+            let (row, tail) = rest.split_at_mut(w[1] - w[0]);
+            rows.push(row);
+            rest = tail;
+        }
+        rows.into_par_iter().for_each(|row| row.sort_unstable_by_key(|&e| key(e)));
+    }
+
     /// The same lists after the particles were reordered so that new index i is old index
     /// `perm[i]` (rows moved, neighbour indices renamed, image codes kept).
     pub fn permuted(&self, perm: &[u32]) -> Self {

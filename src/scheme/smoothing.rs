@@ -44,36 +44,53 @@ pub fn solve_density_and_h_weighted<const D: usize>(
     let mut iters = 0u64;
     let mut rebuilds = 0;
     let mut force = false;
+    // Every particle's solve starts from its h on entry, in every round: a particle whose
+    // Newton path outgrew the list is solved again from there once the list reaches further,
+    // and the others keep their result. So h and ρ are the same path's end whatever the
+    // list's history (its skin, when it was last built), which the distributed run needs
+    // for identical particles on any number of ranks.
+    let start_h = sys.particles.h.clone();
+    let mut pending: Vec<u32> = (0..sys.particles.len() as u32).collect();
     loop {
         let h_allowed = sys.prepare_master_list(SKIN, force);
         let t0 = std::time::Instant::now();
         let results: Vec<HSolve> = {
             let s = &*sys;
-            (0..s.particles.len())
-                .into_par_iter()
+            let x = weights.unwrap_or(&s.particles.mass);
+            pending
+                .par_iter()
                 .with_min_len(64)
-                .map(|a| solve_one(s, weights.unwrap_or(&s.particles.mass), a, h_allowed[a]))
+                .map(|&a| {
+                    let a = a as usize;
+                    solve_one(s, x, a, start_h[a], h_allowed[a])
+                })
                 .collect()
         };
         sys.stats.seconds_density += t0.elapsed().as_secs_f64();
-        let p = &mut sys.particles;
-        p.h.par_iter_mut()
-            .zip(p.rho.par_iter_mut())
-            .zip(p.omega.par_iter_mut())
-            .zip(results.par_iter())
-            .for_each(|(((h, rho), om), r)| {
-                *h = r.h;
-                *rho = r.rho;
-                *om = r.omega;
-            });
-        iters += results.iter().map(|r| r.iterations as u64).sum::<u64>();
-        let again = results.iter().any(|r| r.needs_rebuild);
-        let capped = results.iter().filter(|r| r.capped).count() as u64;
-        sys.stats.h_capped = capped;
         rounds += 1;
-        if !again || rounds >= MAX_ROUNDS {
+        let last = rounds >= MAX_ROUNDS;
+        let p = &mut sys.particles;
+        let mut still = Vec::new();
+        let mut capped = 0u64;
+        for (&a, r) in pending.iter().zip(&results) {
+            let a = a as usize;
+            iters += r.iterations as u64;
+            capped += r.capped as u64;
+            if r.needs_rebuild && !last {
+                // the rebuilt list reaches beyond both its start and where its path stopped
+                p.h[a] = r.h.max(start_h[a]);
+                still.push(a as u32);
+            } else {
+                p.h[a] = r.h;
+                p.rho[a] = r.rho;
+                p.omega[a] = r.omega;
+            }
+        }
+        sys.stats.h_capped = capped;
+        if still.is_empty() || last {
             break;
         }
+        pending = still;
         force = true;
         rebuilds += 1;
     }
@@ -136,14 +153,23 @@ fn kappa_at<const D: usize>(sys: &System<D>, x: &[f64], a: usize, h: f64) -> (f6
     (norm * sum_w, -norm * hinv * sum_h)
 }
 
-/// Solve particle a's h; `h_reach` is the largest h its listed neighbours serve exactly.
-/// Unknown: h with κ(h) = X_a η^D / h^D (i.e. h = η V^{1/D}); then ρ = m_a κ / X_a.
-fn solve_one<const D: usize>(sys: &System<D>, x: &[f64], a: usize, h_reach: f64) -> HSolve {
+/// Solve particle a's h from `h0`; `h_reach` is the largest h its listed neighbours serve
+/// exactly. Unknown: h with κ(h) = X_a η^D / h^D (i.e. h = η V^{1/D}); then ρ = m_a κ / X_a.
+fn solve_one<const D: usize>(
+    sys: &System<D>,
+    x: &[f64],
+    a: usize,
+    h0: f64,
+    h_reach: f64,
+) -> HSolve {
     let xa = x[a];
     let to_rho = sys.particles.mass[a] / xa;
     let eta_d = sys.eta.powi(D as i32);
     let h_cap = h_reach.min(sys.h_max);
-    let mut h = sys.particles.h[a].min(h_cap);
+    // The list cannot serve even the start: solve again from h0 once it reaches further
+    // (the density at the cap, below, stands only if the rounds run out).
+    let h0_beyond_list = h0 > h_cap && h_reach < sys.h_max;
+    let mut h = h0.min(h_cap);
     let mut it = 0;
     // wall and port-buffer particles keep their h (their density comes from the wall or port
     // condition; a buffer's back rows would otherwise grow h into the empty space behind)
@@ -158,8 +184,7 @@ fn solve_one<const D: usize>(sys: &System<D>, x: &[f64], a: usize, h_reach: f64)
             needs_rebuild,
             capped,
         };
-    if sys.particles.body[a] != 0 || sys.particles.port[a] != 0 {
-        let h0 = sys.particles.h[a];
+    if sys.particles.body[a] != 0 || sys.particles.port[a] != 0 || h0_beyond_list {
         let (kappa, dkappa) = kappa_at(sys, x, a, h);
         return finish(h, kappa, dkappa, 1, h0 > h_cap && h_cap < sys.h_max, false);
     }
