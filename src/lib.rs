@@ -13,6 +13,7 @@ pub mod integrate;
 pub mod io;
 pub mod kernel;
 pub mod neighbours;
+pub mod parallel;
 pub mod particles;
 pub mod runner;
 pub mod scheme;

@@ -173,8 +173,11 @@ impl<const D: usize> Particles<D> {
         out
     }
 
-    /// Append every particle of `other`, which must carry the same extra fields.
+    /// Append every particle of `other`, which must carry the same extra fields (or none).
     pub fn append(&mut self, other: &Self) -> Result<(), String> {
+        if other.is_empty() {
+            return Ok(());
+        }
         self.check_same_fields(other)?;
         for_each_field!(other, self, |a, b| b.extend_from_slice(a));
         for (s, o) in self.extra_scalars.iter_mut().zip(&other.extra_scalars) {
@@ -188,6 +191,9 @@ impl<const D: usize> Particles<D> {
 
     /// Overwrite particles `start..start + other.len()` with `other`'s, every field.
     pub fn overwrite(&mut self, start: usize, other: &Self) -> Result<(), String> {
+        if other.is_empty() {
+            return Ok(());
+        }
         self.check_same_fields(other)?;
         let end = start + other.len();
         if end > self.len() {

@@ -101,6 +101,21 @@ pub struct Diagnostics {
     pub max_lorentz: f64,
 }
 
+/// How a run's particles are shared among processes (`parallel`): the driver asks it to
+/// agree on the time step and on every step's outcome, to renew the halo before each step,
+/// and to total the diagnostics. `None` in a single-process run.
+pub trait Layout<const D: usize>: Send + Sync {
+    /// The step every rank takes, from this rank's stability limit.
+    fn agree_dt(&self, local: f64) -> Result<f64, String>;
+    /// Ok on every rank, or every rank's copy of the first failure.
+    fn agree(&self, result: Result<(), String>) -> Result<(), String>;
+    /// Before a step of `dt`: hand particles that left this rank's region to their new
+    /// owners, rebalance when due, and build the halo the step needs.
+    fn before_step(&mut self, sys: &mut System<D>, dt: f64) -> Result<(), String>;
+    /// Totals over the ranks of this rank's diagnostics.
+    fn totals(&self, local: Diagnostics) -> Result<Diagnostics, String>;
+}
+
 pub struct Simulation<const D: usize> {
     pub sys: System<D>,
     pub scheme: Box<dyn Scheme<D>>,
@@ -111,6 +126,8 @@ pub struct Simulation<const D: usize> {
     pub last_dt: f64,
     /// Reorder particles along the grid every this many steps (cache locality); 0 = never.
     pub reorder_every: u64,
+    /// Set in a distributed run (`parallel::Distributed`).
+    pub layout: Option<Box<dyn Layout<D>>>,
 }
 
 impl<const D: usize> Simulation<D> {
@@ -143,16 +160,27 @@ impl<const D: usize> Simulation<D> {
             steps: 0,
             last_dt: 0.0,
             reorder_every: 20,
+            layout: None,
         };
         sim.check_finite()?;
         Ok(sim)
     }
 
-    /// The step the stability criteria allow now.
+    /// The step the stability criteria allow now (on every rank, in a distributed run: a
+    /// failed agreement gives NaN, which stops the run as a collapsed step).
     pub fn stable_dt(&self) -> f64 {
+        let dt = self.local_stable_dt();
+        match &self.layout {
+            Some(l) => l.agree_dt(dt).unwrap_or(f64::NAN),
+            None => dt,
+        }
+    }
+
+    /// [`Self::stable_dt`] over this process's own particles.
+    fn local_stable_dt(&self) -> f64 {
         let p = &self.sys.particles;
         let c = &self.control;
-        let mut dt = (0..p.len())
+        let mut dt = (0..self.sys.owned())
             .into_par_iter()
             .map(|a| {
                 let h = p.h[a];
@@ -175,7 +203,11 @@ impl<const D: usize> Simulation<D> {
     }
 
     fn check_finite(&self) -> Result<(), SolverError> {
-        if let Some((i, field)) = self.sys.first_non_finite() {
+        if let Some((i, field)) = self
+            .sys
+            .first_non_finite()
+            .filter(|&(i, _)| i < self.sys.owned())
+        {
             return Err(SolverError::NonFinite {
                 field,
                 particle: self.sys.particles.id[i],
@@ -207,7 +239,11 @@ impl<const D: usize> Simulation<D> {
                 step: self.steps,
             });
         }
-        if self.reorder_every > 0 && self.steps > 0 && self.steps % self.reorder_every == 0 {
+        if let Some(layout) = &mut self.layout {
+            layout
+                .before_step(&mut self.sys, dt)
+                .map_err(|message| self.ranks_failed(message))?;
+        } else if self.reorder_every > 0 && self.steps > 0 && self.steps % self.reorder_every == 0 {
             self.reorder();
         }
         // the integrator gives each evaluation its stage's time from the step's end time
@@ -230,8 +266,27 @@ impl<const D: usize> Simulation<D> {
         if dt < dt_cap || self.last_dt == 0.0 {
             self.last_dt = dt;
         }
-        self.check_finite()?;
+        self.agreed(self.check_finite())?;
         Ok(dt)
+    }
+
+    /// `result` where every rank agrees it is Ok; else this rank's own error, or the first
+    /// failing rank's.
+    fn agreed(&self, result: Result<(), SolverError>) -> Result<(), SolverError> {
+        let Some(layout) = &self.layout else {
+            return result;
+        };
+        let shared = layout.agree(result.as_ref().map(|_| ()).map_err(|e| e.to_string()));
+        result.and(shared.map_err(|m| self.ranks_failed(m)))
+    }
+
+    /// A distributed run's failure as a solver error at the current step.
+    fn ranks_failed(&self, message: String) -> SolverError {
+        SolverError::Scheme {
+            message: format!("distributed run: {message}"),
+            time: self.time,
+            step: self.steps,
+        }
     }
 
     /// Advance to time t exactly (the last step is shortened to land on t).
@@ -305,7 +360,21 @@ impl<const D: usize> Simulation<D> {
         }
     }
 
+    /// The conserved totals (over every rank in a distributed run; NaN totals if the ranks
+    /// could not agree).
     pub fn diagnostics(&self) -> Diagnostics {
+        let local = self.local_diagnostics();
+        match &self.layout {
+            Some(l) => l.totals(local).unwrap_or(Diagnostics {
+                total_energy: f64::NAN,
+                ..local
+            }),
+            None => local,
+        }
+    }
+
+    /// [`Self::diagnostics`] over this process's own particles.
+    fn local_diagnostics(&self) -> Diagnostics {
         if let Some(sr) = self.sys.relativistic {
             return self.relativistic_diagnostics(sr);
         }
@@ -316,7 +385,7 @@ impl<const D: usize> Simulation<D> {
         } else {
             Vector::<D>::zeros()
         };
-        for a in 0..p.len() {
+        for a in 0..self.sys.owned() {
             // the fluid only: wall particles belong to bodies, whose loads are reported apart,
             // and port buffers are outside the domain
             if p.body[a] != 0 || p.port[a] != 0 {
@@ -349,7 +418,7 @@ impl<const D: usize> Simulation<D> {
             time: self.time,
             step: self.steps,
             dt: self.last_dt,
-            particles: self.sys.particles.len(),
+            particles: self.sys.owned(),
             max_lorentz: 1.0,
             ..Default::default()
         }
@@ -367,7 +436,7 @@ impl<const D: usize> Simulation<D> {
             &p.extra_scalars[sr.energy],
             &p.extra_scalars[sr.lorentz],
         );
-        for a in 0..p.len() {
+        for a in 0..self.sys.owned() {
             d.fluid_particles += 1;
             let nu = p.mass[a];
             d.mass += nu;

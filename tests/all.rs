@@ -23,6 +23,7 @@ mod kernel_choice;
 mod kernels;
 mod lattice;
 mod neighbours;
+mod parallel;
 mod ports;
 mod riemann;
 mod rosswog;

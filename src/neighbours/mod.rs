@@ -221,7 +221,8 @@ impl NeighbourList {
             rows.push(row);
             rest = tail;
         }
-        rows.into_par_iter().for_each(|row| row.sort_unstable_by_key(|&e| key(e)));
+        rows.into_par_iter()
+            .for_each(|row| row.sort_unstable_by_key(|&e| key(e)));
     }
 
     /// The same lists after the particles were reordered so that new index i is old index

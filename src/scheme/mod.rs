@@ -57,6 +57,13 @@ pub trait Scheme<const D: usize>: Send + Sync {
     fn carried_state(&self) -> Vec<f64> {
         vec![]
     }
+    /// How many kernel supports deep a distributed run's halo must be for this scheme's
+    /// owned particles to come out exactly as on one rank (`parallel::halo`): the length of
+    /// its longest chain of passes in which each reads what the previous one computed for
+    /// the neighbours, counting the working list's cut (it reads the neighbours' h) as one.
+    fn halo_depth(&self) -> usize {
+        4
+    }
     /// Put back what [`Self::carried_state`] returned.
     fn set_carried_state(&mut self, state: &[f64]) -> Result<(), String> {
         if state.is_empty() {

@@ -223,6 +223,13 @@ impl<const D: usize> Scheme<D> for StandardSph {
         self.name
     }
 
+    /// h and ρ (neighbours' positions), the working list's cut (their h), then the velocity
+    /// gradients on the cut rows, and the force (their ρ, P, Ω and Balsara factors): three
+    /// supports; the wall condition (walls read the fluid's P) is not distributed yet.
+    fn halo_depth(&self) -> usize {
+        3
+    }
+
     fn init(&mut self, sys: &mut System<D>) {
         sys.evolve_density = self.params.density == DensityMode::Continuity;
         self.balsara_slot = sys.particles.add_scalar_field(1.0);

@@ -1,0 +1,353 @@
+//! Domain decomposition: a run shared among ranks (processes under MPI, or threads in the
+//! tests), each owning the particles in its region of space (`regions`), evaluating them
+//! with a halo of copies of its neighbours' particles (`halo`), and handing particles that
+//! leave its region to their new owner at every step.
+//!
+//! Every rank's particles come out bit for bit as on one rank, whatever the number of
+//! ranks: neighbour rows are summed in the order of the particles' stable ids
+//! (`System::canonical_order`), the h solve's result does not depend on the neighbour list's
+//! history, the halo is deep enough for every pass (see `halo`), and the time step is a
+//! global minimum. Totals (diagnostics) are sums of per-rank sums, in rank order: equal to
+//! round-off, not to the bit, across rank counts.
+
+pub mod comm;
+mod halo;
+#[cfg(feature = "mpi")]
+pub mod mpi;
+pub mod regions;
+
+pub use halo::{ExchangeStats, HaloScheme, Link};
+
+use crate::integrate::IntegratorKind;
+use crate::particles::{Particles, Vector};
+use crate::scheme::Scheme;
+use crate::sim::{Diagnostics, Layout, Simulation, SolverError, StepControl};
+use crate::system::System;
+use comm::{Comm, Reduce};
+use regions::Regions;
+use std::sync::Arc;
+
+/// Rebalance when the most loaded rank's cost exceeds the mean by this fraction: every rank
+/// waits for the slowest at each step's collectives, so a 10 % excess wastes up to 10 % of
+/// the others' time, while a rebalance costs one all-gather of the positions and a
+/// migration, about a few halo exchanges' worth; checked every `BALANCE_EVERY` steps.
+pub const IMBALANCE_LIMIT: f64 = 0.10;
+pub const BALANCE_EVERY: u64 = 16;
+/// Growth of the largest h within one step that the halo allows for (the h solve's
+/// prediction alone may reach 20 %); a step that grows it further is reported, not hidden.
+pub const H_GROWTH: f64 = 1.25;
+
+/// The particles of a case shared among ranks: [`Layout`] of a distributed [`Simulation`].
+pub struct Decomposition<const D: usize> {
+    link: Arc<Link>,
+    regions: Regions<D>,
+    depth: usize,
+    steps: u64,
+    /// The largest h the current halo allows for.
+    h_allowed: f64,
+}
+
+/// Start a distributed run. Every rank passes the same whole system (as built from the
+/// case); each keeps the particles of its region, and the scheme is wrapped so that its
+/// halo is refreshed before every evaluation.
+pub fn start<const D: usize>(
+    sys: System<D>,
+    scheme: Box<dyn Scheme<D>>,
+    kind: IntegratorKind,
+    control: StepControl,
+    comm: Arc<dyn Comm>,
+) -> Result<Simulation<D>, SolverError> {
+    let depth = scheme.halo_depth();
+    start_with_halo(sys, scheme, kind, control, comm, depth)
+}
+
+/// [`start`] with a halo `depth` kernel supports deep instead of the scheme's own (the tests
+/// show that a thinner halo than the scheme needs changes the particles).
+pub fn start_with_halo<const D: usize>(
+    mut sys: System<D>,
+    scheme: Box<dyn Scheme<D>>,
+    kind: IntegratorKind,
+    control: StepControl,
+    comm: Arc<dyn Comm>,
+    depth: usize,
+) -> Result<Simulation<D>, SolverError> {
+    let refuse = |what: &str| {
+        SolverError::Scheme {
+        message: format!(
+            "distributed run: {what} are not supported on several ranks yet; run the case in one process"
+        ),
+        time: 0.0,
+        step: 0,
+    }
+    };
+    if !sys.bodies.is_empty() {
+        return Err(refuse("bodies ([[body]], walls)"));
+    }
+    if !sys.ports.is_empty() {
+        return Err(refuse("ports ([[port]])"));
+    }
+    if !sys.drives.is_empty() {
+        return Err(refuse("driven regions ([[drive]])"));
+    }
+    if sys.frame.is_some() {
+        return Err(refuse("moving frames ([frame])"));
+    }
+    sys.canonical_order = true;
+    sys.halo = 0;
+    let link = Arc::new(Link::new(comm.clone()));
+    let points: Vec<(Vector<D>, f64)> = sys.particles.pos.iter().map(|x| (*x, 1.0)).collect();
+    let regions = Regions::bisect(&points, comm.size(), &sys.domain);
+    let mine: Vec<u32> = (0..sys.particles.len() as u32)
+        .filter(|&i| regions.owner(&sys.particles.pos[i as usize]) == comm.rank())
+        .collect();
+    sys.particles.permute(&mine);
+    let mut layout = Decomposition {
+        link: link.clone(),
+        regions,
+        depth,
+        steps: 0,
+        h_allowed: 0.0,
+    };
+    let fail = |message: String| SolverError::Scheme {
+        message: format!("distributed run: {message}"),
+        time: 0.0,
+        step: 0,
+    };
+    layout.build_halo(&mut sys, 0.0).map_err(fail)?;
+    let wrapped = Box::new(HaloScheme {
+        inner: scheme,
+        link: link.clone(),
+    });
+    let mut sim = Simulation::new(sys, wrapped, kind, control)?;
+    sim.reorder_every = 0;
+    sim.layout = Some(Box::new(layout));
+    Ok(sim)
+}
+
+impl<const D: usize> Decomposition<D> {
+    fn comm(&self) -> &dyn Comm {
+        &*self.link.comm
+    }
+
+    /// Copy the owned particles near other ranks' regions to them, and append theirs.
+    fn build_halo(&mut self, sys: &mut System<D>, dt: f64) -> Result<(), String> {
+        let comm = self.comm();
+        let (me, ranks) = (comm.rank(), comm.size());
+        let own = sys.owned();
+        let p = &sys.particles;
+        let (mut h, mut speed, mut accel) = (0.0_f64, 0.0_f64, 0.0_f64);
+        for i in 0..own {
+            h = h.max(p.h[i]);
+            speed = speed.max(p.vel[i].norm());
+            accel = accel.max(p.acc[i].norm());
+        }
+        let h = comm.max(h).map_err(|e| e.to_string())?;
+        let speed = comm.max(speed).map_err(|e| e.to_string())?;
+        let accel = comm.max(accel).map_err(|e| e.to_string())?;
+        self.h_allowed = H_GROWTH * h;
+        // two particles approach by at most twice the largest displacement in the step
+        let moved = 2.0 * 1.1 * (speed * dt + 0.5 * accel * dt * dt);
+        let width = self.depth as f64 * sys.kernel.radius(self.h_allowed) + moved;
+        let mut send = vec![Vec::new(); ranks];
+        for i in 0..own {
+            for (r, list) in send.iter_mut().enumerate() {
+                if r != me && self.regions.distance(r, &p.pos[i]) < width {
+                    list.push(i as u32);
+                }
+            }
+        }
+        let parts = send.iter().map(|pick| Some(p.selected(pick))).collect();
+        let got = self.link.exchange(parts)?;
+        let recv = got.iter().map(|g| g.len()).collect();
+        for (r, part) in got.iter().enumerate() {
+            if r != me {
+                sys.particles.append(part)?;
+            }
+        }
+        sys.halo = sys.particles.len() - own;
+        sys.reset_neighbours();
+        *self.link.plan.lock().unwrap_or_else(|e| e.into_inner()) = halo::HaloPlan { send, recv };
+        self.link
+            .stats
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .halo_particles = sys.halo as u64;
+        Ok(())
+    }
+
+    /// Drop the halo, and hand every owned particle outside this rank's region to its owner.
+    fn migrate(&mut self, sys: &mut System<D>) -> Result<(), String> {
+        let comm = self.comm();
+        let (me, ranks) = (comm.rank(), comm.size());
+        sys.particles.truncate(sys.owned());
+        sys.halo = 0;
+        let p = &sys.particles;
+        let mut leave = vec![Vec::new(); ranks];
+        let mut stay = Vec::with_capacity(p.len());
+        for i in 0..p.len() {
+            match self.regions.owner(&p.pos[i]) {
+                r if r == me => stay.push(i as u32),
+                r => leave[r].push(i as u32),
+            }
+        }
+        let moved: usize = leave.iter().map(|l| l.len()).sum();
+        let parts = leave.iter().map(|pick| Some(p.selected(pick))).collect();
+        let got = self.link.exchange(parts)?;
+        sys.particles.permute(&stay);
+        for (r, part) in got.iter().enumerate() {
+            if r != me {
+                sys.particles.append(part)?;
+            }
+        }
+        sys.reset_neighbours();
+        self.link
+            .stats
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .migrated += moved as u64;
+        Ok(())
+    }
+
+    /// New regions from every rank's particles, weighted by their neighbour counts, when
+    /// the load is out of balance by more than [`IMBALANCE_LIMIT`].
+    fn rebalance(&mut self, sys: &System<D>) -> Result<(), String> {
+        let own = sys.owned();
+        let nb = &sys.neighbours;
+        let cost = |i: usize| {
+            1.0 + if nb.offsets.len() > i + 1 {
+                nb.of(i).len() as f64
+            } else {
+                0.0
+            }
+        };
+        let mine: f64 = (0..own).map(cost).sum();
+        let comm = self.comm();
+        let loads = comm
+            .all_gather(comm::f64_bytes(&[mine]))
+            .map_err(|e| e.to_string())?;
+        let loads: Vec<f64> = loads.iter().flat_map(|b| comm::bytes_f64(b)).collect();
+        let mean = loads.iter().sum::<f64>() / loads.len() as f64;
+        let worst = loads.iter().cloned().fold(0.0, f64::max);
+        if mean <= 0.0 || worst <= (1.0 + IMBALANCE_LIMIT) * mean {
+            return Ok(());
+        }
+        let p = &sys.particles;
+        let mut flat = Vec::with_capacity(own * (D + 1));
+        for i in 0..own {
+            flat.extend(p.pos[i].iter());
+            flat.push(cost(i));
+        }
+        let all = comm
+            .all_gather(comm::f64_bytes(&flat))
+            .map_err(|e| e.to_string())?;
+        let points: Vec<(Vector<D>, f64)> = all
+            .iter()
+            .flat_map(|b| {
+                comm::bytes_f64(b)
+                    .chunks_exact(D + 1)
+                    .map(|c| (Vector::<D>::from_fn(|k, _| c[k]), c[D]))
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        self.regions = Regions::bisect(&points, comm.size(), &sys.domain);
+        let mut s = self.link.stats.lock().unwrap_or_else(|e| e.into_inner());
+        s.rebalances += 1;
+        s.bytes_sent += (flat.len() * 8) as u64;
+        Ok(())
+    }
+}
+
+impl<const D: usize> Layout<D> for Decomposition<D> {
+    fn agree_dt(&self, local: f64) -> Result<f64, String> {
+        self.comm().min(local).map_err(|e| e.to_string())
+    }
+
+    fn agree(&self, result: Result<(), String>) -> Result<(), String> {
+        let failed = self
+            .link
+            .failure
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .take();
+        self.link.agree(result.and(failed.map_or(Ok(()), Err)))
+    }
+
+    fn before_step(&mut self, sys: &mut System<D>, dt: f64) -> Result<(), String> {
+        // the previous step's h must have stayed within what its halo allowed for
+        let own = sys.owned();
+        let h = sys.particles.h[..own].iter().cloned().fold(0.0, f64::max);
+        let h = self.comm().max(h).map_err(|e| e.to_string())?;
+        if self.h_allowed > 0.0 && h > self.h_allowed {
+            return Err(format!(
+                "the largest smoothing length grew to {h:.4e} within one step, past the {:.4e} its halo allowed for ({H_GROWTH} times the step's start)",
+                self.h_allowed
+            ));
+        }
+        if self.steps > 0 && self.steps % BALANCE_EVERY == 0 && self.comm().size() > 1 {
+            self.rebalance(sys)?;
+        }
+        self.steps += 1;
+        self.migrate(sys)?;
+        self.build_halo(sys, dt)
+    }
+
+    fn totals(&self, d: Diagnostics) -> Result<Diagnostics, String> {
+        let local = [
+            d.particles as f64,
+            d.fluid_particles as f64,
+            d.mass,
+            d.momentum[0],
+            d.momentum[1],
+            d.momentum[2],
+            d.angular_momentum[0],
+            d.angular_momentum[1],
+            d.angular_momentum[2],
+            d.kinetic_energy,
+            d.internal_energy,
+            d.potential_energy,
+            d.total_energy,
+        ];
+        let comm = self.comm();
+        let t = comm.sum(&local).map_err(|e| e.to_string())?;
+        Ok(Diagnostics {
+            particles: t[0] as usize,
+            fluid_particles: t[1] as usize,
+            mass: t[2],
+            momentum: [t[3], t[4], t[5]],
+            angular_momentum: [t[6], t[7], t[8]],
+            kinetic_energy: t[9],
+            internal_energy: t[10],
+            potential_energy: t[11],
+            total_energy: t[12],
+            max_lorentz: comm.max(d.max_lorentz).map_err(|e| e.to_string())?,
+            ..d
+        })
+    }
+}
+
+/// Every rank's own particles, ordered by id (a collective: every rank calls it, every rank
+/// gets them all). For output and for comparing runs on different numbers of ranks.
+pub fn gather_particles<const D: usize>(
+    sim: &Simulation<D>,
+    comm: &dyn Comm,
+) -> Result<Particles<D>, String> {
+    let own = sim
+        .sys
+        .particles
+        .selected(&(0..sim.sys.owned() as u32).collect::<Vec<_>>());
+    let bytes = postcard::to_stdvec(&own).map_err(|e| e.to_string())?;
+    let all = comm.all_gather(bytes).map_err(|e| e.to_string())?;
+    let mut out = Particles::<D>::default();
+    for b in all {
+        let part: Particles<D> = postcard::from_bytes(&b).map_err(|e| e.to_string())?;
+        if out.is_empty() {
+            out = part;
+        } else {
+            out.append(&part)?;
+        }
+    }
+    let mut order: Vec<u32> = (0..out.len() as u32).collect();
+    order.sort_by_key(|&i| out.id[i as usize]);
+    out.permute(&order);
+    Ok(out)
+}
