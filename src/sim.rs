@@ -114,6 +114,10 @@ pub trait Layout<const D: usize>: Send + Sync {
     fn before_step(&mut self, sys: &mut System<D>, dt: f64) -> Result<(), String>;
     /// Totals over the ranks of this rank's diagnostics.
     fn totals(&self, local: Diagnostics) -> Result<Diagnostics, String>;
+    /// Element-wise sums over the ranks.
+    fn sum(&self, x: &[f64]) -> Result<Vec<f64>, String>;
+    /// What the ranks exchanged so far (this rank's counters), and how many ranks there are.
+    fn exchange(&self) -> (usize, crate::parallel::ExchangeStats);
 }
 
 pub struct Simulation<const D: usize> {

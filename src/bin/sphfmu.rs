@@ -3,7 +3,7 @@
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use sphfmu::case::Case;
-use sphfmu::runner::{run_case, Progress, RunError};
+use sphfmu::runner::{run_case_on, Progress, RunError};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -335,6 +335,11 @@ fn main() -> ExitCode {
             scheme,
             sets,
         } => {
+            let ranks = match sphfmu::parallel::launched() {
+                Ok(r) => r,
+                Err(e) => return fail(2, format!("run: {e}")),
+            };
+            let threads = threads.or(ranks.as_ref().and(sphfmu::parallel::threads_per_rank()));
             if let Err(e) = set_threads(threads) {
                 return fail(2, e);
             }
@@ -342,7 +347,9 @@ fn main() -> ExitCode {
                 Ok(c) => c,
                 Err(e) => return fail(2, e),
             };
-            let bar = if quiet {
+            // under mpirun, rank 0 alone draws and prints
+            let root = ranks.as_ref().is_none_or(|r| r.rank() == 0);
+            let bar = if quiet || !root {
                 ProgressBar::hidden()
             } else {
                 ProgressBar::new(1000)
@@ -369,12 +376,19 @@ fn main() -> ExitCode {
             // every parallel pass paid the hand-over into the pool (issue 19 measured the
             // closed tank 19.1 s -> 14.1 s and Noh 15.8 s -> 13.6 s this way)
             let res = match threads_pool(threads) {
-                Ok(pool) => pool.install(|| run_case(&c, &out, &mut on)),
+                Ok(pool) => pool.install(|| run_case_on(&c, &out, &mut on, ranks)),
                 Err(e) => return fail(2, e),
             };
             bar.finish_and_clear();
             match res {
+                Ok(_) if !root => ExitCode::SUCCESS,
                 Ok(s) => {
+                    if let Some(x) = &s.exchange {
+                        println!(
+                            "{} ranks: rank 0 sent {:.3e} bytes in {} messages, {:.2} s in exchanges, {} halo copies, {} particles migrated, {} rebalances",
+                            s.ranks, x.bytes_sent as f64, x.messages, x.seconds, x.halo_particles, x.migrated, x.rebalances
+                        );
+                    }
                     println!(
                         "{}: {} particles, {} steps to t = {:.6} s, {:.2} s wall clock, {:.3e} particle-updates/s",
                         s.case, s.particles, s.steps, s.time, s.wall_seconds, s.particle_updates_per_second

@@ -307,27 +307,52 @@ impl Case {
     /// The simulation of this case's scheme, integrator and step control on `sys` (a system
     /// from [`Self::system`], possibly adjusted: tests place particles the lattice cannot).
     pub fn simulation<const D: usize>(&self, sys: System<D>) -> Result<Simulation<D>, CaseError> {
-        let initial = |e: SolverError| CaseError(format!("initial state: {e}"));
-        let mut sim = Simulation::new(
+        let sim = Simulation::new(
             sys,
             self.scheme.build::<D>(),
             self.integrator(),
             self.step_control(),
         )
-        .map_err(initial)?;
-        // `[[field]] stage = "density"`: set from the scheme's density, then evaluate again;
-        // repeated while the density moves (X = P^k volume elements make it depend on P)
+        .map_err(initial_state)?;
+        self.density_stage(sim)
+    }
+
+    /// This case on the ranks of `comm` (`parallel`): every rank builds the whole system and
+    /// keeps its own region's particles.
+    pub fn distributed<const D: usize>(
+        &self,
+        comm: std::sync::Arc<dyn crate::parallel::comm::Comm>,
+    ) -> Result<Simulation<D>, CaseError> {
+        let sim = crate::parallel::start(
+            self.system::<D>()?,
+            self.scheme.build::<D>(),
+            self.integrator(),
+            self.step_control(),
+            comm,
+        )
+        .map_err(initial_state)?;
+        self.density_stage(sim)
+    }
+
+    /// `[[field]] stage = "density"`: set from the scheme's density, then evaluate again;
+    /// repeated while the density moves (X = P^k volume elements make it depend on P).
+    fn density_stage<const D: usize>(&self, mut sim: Simulation<D>) -> Result<Simulation<D>, CaseError> {
         for _ in 0..MAX_DENSITY_STAGE_PASSES {
             let before = sim.sys.particles.rho.clone();
             if !fields::apply_after_density(&self.fields, &mut sim.sys)? {
                 break;
             }
-            sim.reevaluate().map_err(initial)?;
-            let moved = before
+            sim.reevaluate().map_err(initial_state)?;
+            let own = sim.sys.owned();
+            let mut moved = before[..own]
                 .iter()
                 .zip(&sim.sys.particles.rho)
                 .map(|(a, b)| ((a - b) / b).abs())
                 .fold(0.0, f64::max);
+            if let Some(layout) = &sim.layout {
+                // every rank stops at the same pass: the largest change over the ranks
+                moved = -layout.agree_dt(-moved).map_err(|e| CaseError(format!("initial state: {e}")))?;
+            }
             if moved < 1e-13 {
                 break;
             }
@@ -450,4 +475,9 @@ impl Case {
             time: 0.0,
         })
     }
+}
+
+/// A failure while building the initial state, as a case error.
+fn initial_state(e: SolverError) -> CaseError {
+    CaseError(format!("initial state: {e}"))
 }

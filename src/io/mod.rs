@@ -89,6 +89,45 @@ pub fn write_vtu<const D: usize>(path: &Path, p: &Particles<D>, time: f64) -> io
     write_atomic(path, s.as_bytes())
 }
 
+/// The point arrays of [`write_vtu`] (name, VTK type, components), for the `.pvtu` header of
+/// a snapshot written in pieces; a unit test checks that every one of them is in a VTU.
+pub const VTU_ARRAYS: [(&str, &str, usize); 11] = [
+    ("velocity", "Float64", 3),
+    ("density", "Float64", 1),
+    ("pressure", "Float64", 1),
+    ("internal_energy", "Float64", 1),
+    ("smoothing_length", "Float64", 1),
+    ("mass", "Float64", 1),
+    ("sound_speed", "Float64", 1),
+    ("id", "UInt32", 1),
+    ("material", "UInt16", 1),
+    ("body", "UInt16", 1),
+    ("port", "UInt16", 1),
+];
+
+/// A snapshot written in pieces, one VTU per rank (`pieces`: file names relative to it), as
+/// one ParaView dataset (`.pvtu`).
+pub fn write_pvtu(path: &Path, pieces: &[String], time: f64) -> io::Result<()> {
+    let mut s = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"PUnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n<PUnstructuredGrid GhostLevel=\"0\">\n",
+    );
+    let _ = writeln!(s, "<FieldData><DataArray type=\"Float64\" Name=\"TIME\" NumberOfTuples=\"1\" format=\"ascii\">{time:e}</DataArray></FieldData>");
+    s.push_str("<PPoints><PDataArray type=\"Float64\" NumberOfComponents=\"3\"/></PPoints>\n");
+    s.push_str("<PPointData Scalars=\"density\" Vectors=\"velocity\">\n");
+    for (name, kind, n) in VTU_ARRAYS {
+        let _ = writeln!(
+            s,
+            "<PDataArray type=\"{kind}\" Name=\"{name}\" NumberOfComponents=\"{n}\"/>"
+        );
+    }
+    s.push_str("</PPointData>\n");
+    for piece in pieces {
+        let _ = writeln!(s, "<Piece Source=\"{piece}\"/>");
+    }
+    s.push_str("</PUnstructuredGrid>\n</VTKFile>\n");
+    write_atomic(path, s.as_bytes())
+}
+
 /// Snapshot as CSV with columns x,y,z,vx,vy,vz,m,h,rho,u,P,cs,id,material (sarracen/pandas names).
 /// A ParaView collection (`.pvd`): the VTU files (names relative to it) at their times, so
 /// they open as one time series.
@@ -174,5 +213,30 @@ impl DiagnosticsWriter {
             d.kinetic_energy, d.internal_energy, d.potential_energy, d.total_energy
         )?;
         self.file.flush()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::particles::Vector;
+
+    /// The `.pvtu` header lists exactly the arrays a piece holds, with their types.
+    #[test]
+    fn pvtu_arrays_are_the_vtu_arrays() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let mut p = Particles::<2>::default();
+        p.push(1.0, Vector::zeros(), Vector::zeros(), 1.0, 1.0, 0.1, 0);
+        let path = dir.path().join("a.vtu");
+        write_vtu(&path, &p, 0.0).expect("vtu");
+        let text = std::fs::read_to_string(&path).expect("read");
+        let arrays = text.matches("<DataArray").count();
+        // TIME, the points and the three cell arrays besides the point data
+        assert_eq!(arrays, VTU_ARRAYS.len() + 5, "a VTU array missing from VTU_ARRAYS");
+        for (name, kind, n) in VTU_ARRAYS {
+            let tag = format!("type=\"{kind}\" Name=\"{name}\"");
+            assert!(text.contains(&tag), "{tag} not in the VTU");
+            assert_eq!(n == 3, text.contains(&format!("{tag} NumberOfComponents=\"3\"")), "{name}");
+        }
     }
 }

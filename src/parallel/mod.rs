@@ -45,6 +45,8 @@ pub struct Decomposition<const D: usize> {
     steps: u64,
     /// The largest h the current halo allows for.
     h_allowed: f64,
+    /// The halo allows for at least this h (the first evaluation's, estimated at the start).
+    h_floor: f64,
 }
 
 /// Start a distributed run. Every rank passes the same whole system (as built from the
@@ -94,6 +96,14 @@ pub fn start_with_halo<const D: usize>(
     }
     sys.canonical_order = true;
     sys.halo = 0;
+    // The first evaluation solves h from the case's guess, which at free surfaces and
+    // density jumps can grow it past any fixed allowance: size the first halo from a solve
+    // on the whole system (every rank holds all of it now), and keep the case's guess.
+    let guess = sys.particles.h.clone();
+    crate::scheme::smoothing::solve_density_and_h(&mut sys);
+    let h_first = sys.particles.h.iter().cloned().fold(0.0, f64::max);
+    sys.particles.h = guess;
+    sys.reset_neighbours();
     let link = Arc::new(Link::new(comm.clone()));
     let points: Vec<(Vector<D>, f64)> = sys.particles.pos.iter().map(|x| (*x, 1.0)).collect();
     let regions = Regions::bisect(&points, comm.size(), &sys.domain);
@@ -107,6 +117,7 @@ pub fn start_with_halo<const D: usize>(
         depth,
         steps: 0,
         h_allowed: 0.0,
+        h_floor: h_first,
     };
     let fail = |message: String| SolverError::Scheme {
         message: format!("distributed run: {message}"),
@@ -131,6 +142,7 @@ impl<const D: usize> Decomposition<D> {
 
     /// Copy the owned particles near other ranks' regions to them, and append theirs.
     fn build_halo(&mut self, sys: &mut System<D>, dt: f64) -> Result<(), String> {
+        let floor = std::mem::take(&mut self.h_floor);
         let comm = self.comm();
         let (me, ranks) = (comm.rank(), comm.size());
         let own = sys.owned();
@@ -141,7 +153,7 @@ impl<const D: usize> Decomposition<D> {
             speed = speed.max(p.vel[i].norm());
             accel = accel.max(p.acc[i].norm());
         }
-        let h = comm.max(h).map_err(|e| e.to_string())?;
+        let h = comm.max(h).map_err(|e| e.to_string())?.max(floor);
         let speed = comm.max(speed).map_err(|e| e.to_string())?;
         let accel = comm.max(accel).map_err(|e| e.to_string())?;
         self.h_allowed = H_GROWTH * h;
@@ -291,6 +303,14 @@ impl<const D: usize> Layout<D> for Decomposition<D> {
         self.build_halo(sys, dt)
     }
 
+    fn sum(&self, x: &[f64]) -> Result<Vec<f64>, String> {
+        self.comm().sum(x).map_err(|e| e.to_string())
+    }
+
+    fn exchange(&self) -> (usize, ExchangeStats) {
+        (self.comm().size(), self.link.stats())
+    }
+
     fn totals(&self, d: Diagnostics) -> Result<Diagnostics, String> {
         let local = [
             d.particles as f64,
@@ -350,4 +370,38 @@ pub fn gather_particles<const D: usize>(
     order.sort_by_key(|&i| out.id[i as usize]);
     out.permute(&order);
     Ok(out)
+}
+
+/// The ranks this process was started among by `mpirun` (Open MPI's or MPICH's launcher
+/// environment), or `None` when it was started alone. Under mpirun, even on one rank, the
+/// run is distributed (so that 1, 2 and 3 ranks give the same particles).
+pub fn launched() -> Result<Option<Arc<dyn Comm>>, String> {
+    let size = std::env::var("OMPI_COMM_WORLD_SIZE")
+        .or_else(|_| std::env::var("PMI_SIZE"))
+        .ok();
+    let Some(size) = size else {
+        return Ok(None);
+    };
+    #[cfg(feature = "mpi")]
+    {
+        let _ = size;
+        match mpi::MpiComm::init() {
+            Some(c) => Ok(Some(Arc::new(c))),
+            None => Err("mpirun: MPI could not be initialised".into()),
+        }
+    }
+    #[cfg(not(feature = "mpi"))]
+    Err(format!(
+        "started by mpirun ({size} ranks), but this sphfmu was built without MPI: build it with \
+         `cargo build --release --features mpi` (needs Open MPI: Debian's libopenmpi-dev and openmpi-bin), \
+         or run it without mpirun"
+    ))
+}
+
+/// Worker threads per rank when none are asked for: the cores shared among the ranks on
+/// this machine (Open MPI's `OMPI_COMM_WORLD_LOCAL_SIZE`), at least one.
+pub fn threads_per_rank() -> Option<usize> {
+    let local: usize = std::env::var("OMPI_COMM_WORLD_LOCAL_SIZE").ok()?.parse().ok()?;
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    Some((cores / local.max(1)).max(1))
 }

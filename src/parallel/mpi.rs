@@ -93,11 +93,14 @@ impl Comm for MpiComm {
         let mut recv_counts = vec![0 as Count; self.size];
         self.world
             .all_to_all_into(&send_counts[..], &mut recv_counts[..]);
-        let flat: Vec<u8> = send.concat();
+        // one spare byte each: two empty buffers would share the same dangling address, which
+        // Open MPI rejects as an aliased send and receive buffer (MPI_ERR_ARG)
+        let mut flat: Vec<u8> = send.concat();
+        flat.push(0);
         let send_displs = displacements(&send_counts);
         let recv_displs = displacements(&recv_counts);
         let total: usize = recv_counts.iter().map(|&n| n as usize).sum();
-        let mut recv = vec![0u8; total];
+        let mut recv = vec![0u8; total + 1];
         {
             let outgoing = Partition::new(&flat[..], &send_counts[..], &send_displs[..]);
             let mut incoming = PartitionMut::new(&mut recv[..], &recv_counts[..], &recv_displs[..]);
@@ -107,18 +110,8 @@ impl Comm for MpiComm {
         Ok(split(recv, &recv_counts))
     }
     fn all_gather(&self, mine: Vec<u8>) -> Result<Vec<Vec<u8>>, CommError> {
-        let _g = self.guard()?;
-        let n = counts(std::iter::once(mine.len()))?[0];
-        let mut all_counts = vec![0 as Count; self.size];
-        self.world.all_gather_into(&n, &mut all_counts[..]);
-        let displs = displacements(&all_counts);
-        let total: usize = all_counts.iter().map(|&n| n as usize).sum();
-        let mut recv = vec![0u8; total];
-        {
-            let mut incoming = PartitionMut::new(&mut recv[..], &all_counts[..], &displs[..]);
-            self.world
-                .all_gather_varcount_into(&mine[..], &mut incoming);
-        }
-        Ok(split(recv, &all_counts))
+        // as an all-to-all of the same bytes to every rank: MPI_Allgatherv through rsmpi
+        // reported truncation on Open MPI 4.1 with buffers the all-to-all handles
+        self.all_to_all(vec![mine; self.size])
     }
 }

@@ -3,7 +3,9 @@
 
 use crate::case::{Case, CaseError, SnapshotFormat};
 use crate::io::{self, DiagnosticsWriter};
+use crate::parallel::comm::Comm;
 use crate::sim::{Simulation, SolverError};
+use std::sync::Arc;
 use crate::verify::radial::RadialErrors;
 use crate::verify::ShockTubeErrors;
 use std::fmt;
@@ -12,6 +14,7 @@ use std::time::Instant;
 
 mod checks;
 mod loads;
+mod ranks;
 
 /// Why a run failed, and the exit code the CLI uses for it.
 #[derive(Debug)]
@@ -89,6 +92,11 @@ pub struct RunSummary {
     pub case: String,
     pub dimension: usize,
     pub particles: usize,
+    /// Ranks the run was shared among (1: one process).
+    pub ranks: usize,
+    /// A distributed run's exchanges (rank 0's counters: bytes and messages it sent, time
+    /// in exchanges, halo copies at the end, migrations, rebalances).
+    pub exchange: Option<crate::parallel::ExchangeStats>,
     pub steps: u64,
     pub time: f64,
     pub wall_seconds: f64,
@@ -169,11 +177,22 @@ pub fn run_case(
     out: &Path,
     progress: &mut dyn FnMut(&Progress),
 ) -> Result<RunSummary, RunError> {
+    run_case_on(case, out, progress, None)
+}
+
+/// [`run_case`] shared among the ranks of `ranks` (`parallel`), or in this process alone
+/// (`None`). Every rank calls it; rank 0 writes the outputs and calls `progress`.
+pub fn run_case_on(
+    case: &Case,
+    out: &Path,
+    progress: &mut dyn FnMut(&Progress),
+    ranks: Option<Arc<dyn Comm>>,
+) -> Result<RunSummary, RunError> {
     std::fs::create_dir_all(out).map_err(|e| io_err(out, e))?;
     match case.dimension() {
-        1 => run_dim::<1>(case, out, progress),
-        2 => run_dim::<2>(case, out, progress),
-        _ => run_dim::<3>(case, out, progress),
+        1 => run_dim::<1>(case, out, progress, ranks),
+        2 => run_dim::<2>(case, out, progress, ranks),
+        _ => run_dim::<3>(case, out, progress, ranks),
     }
 }
 
@@ -185,18 +204,38 @@ struct Snapshots {
 }
 
 impl Snapshots {
-    fn write<const D: usize>(&mut self, sim: &Simulation<D>) -> Result<(), RunError> {
+    fn write<const D: usize>(
+        &mut self,
+        sim: &Simulation<D>,
+        ranks: Option<&dyn Comm>,
+    ) -> Result<(), RunError> {
         let idx = self.written.len();
         for f in &self.formats {
-            let path = match f {
-                SnapshotFormat::Vtu => self.dir.join(format!("snapshot_{idx:05}.vtu")),
-                SnapshotFormat::Csv => self.dir.join(format!("snapshot_{idx:05}.csv")),
+            let path = match (f, ranks) {
+                (SnapshotFormat::Vtu, Some(comm)) => {
+                    ranks::write_vtu_pieces(&self.dir, idx, sim, comm)?
+                }
+                (SnapshotFormat::Csv, Some(comm)) => {
+                    let all = crate::parallel::gather_particles(sim, comm)
+                        .map_err(|e| RunError::Io(format!("distributed run: {e}")))?;
+                    let path = self.dir.join(format!("snapshot_{idx:05}.csv"));
+                    if comm.rank() == 0 {
+                        io::write_csv(&path, &all).map_err(|e| io_err(&path, e))?;
+                    }
+                    path
+                }
+                (SnapshotFormat::Vtu, None) => {
+                    let path = self.dir.join(format!("snapshot_{idx:05}.vtu"));
+                    io::write_vtu(&path, &sim.sys.particles, sim.time)
+                        .map_err(|e| io_err(&path, e))?;
+                    path
+                }
+                (SnapshotFormat::Csv, None) => {
+                    let path = self.dir.join(format!("snapshot_{idx:05}.csv"));
+                    io::write_csv(&path, &sim.sys.particles).map_err(|e| io_err(&path, e))?;
+                    path
+                }
             };
-            match f {
-                SnapshotFormat::Vtu => io::write_vtu(&path, &sim.sys.particles, sim.time),
-                SnapshotFormat::Csv => io::write_csv(&path, &sim.sys.particles),
-            }
-            .map_err(|e| io_err(&path, e))?;
             if *f == SnapshotFormat::Vtu {
                 self.written.push((sim.time, path.clone()));
             }
@@ -204,6 +243,9 @@ impl Snapshots {
         }
         if !self.formats.contains(&SnapshotFormat::Vtu) {
             self.written.push((sim.time, PathBuf::new()));
+        }
+        if ranks.is_some_and(|c| c.rank() != 0) {
+            return Ok(());
         }
         self.write_index()?;
         self.write_pvd()
@@ -259,10 +301,23 @@ fn run_dim<const D: usize>(
     case: &Case,
     out: &Path,
     progress: &mut dyn FnMut(&Progress),
+    ranks: Option<Arc<dyn Comm>>,
 ) -> Result<RunSummary, RunError> {
-    let mut sim = case.build::<D>()?;
+    let mut sim = match &ranks {
+        Some(comm) => case.distributed::<D>(comm.clone())?,
+        None => case.build::<D>()?,
+    };
+    let comm = ranks.as_deref();
+    let root = comm.is_none_or(|c| c.rank() == 0);
     let diag_path = out.join("diagnostics.csv");
-    let mut diag = DiagnosticsWriter::create(&diag_path, D).map_err(|e| io_err(&diag_path, e))?;
+    let mut diag = match root {
+        true => Some(DiagnosticsWriter::create(&diag_path, D).map_err(|e| io_err(&diag_path, e))?),
+        false => None,
+    };
+    let mut record = |d: &crate::sim::Diagnostics| match &mut diag {
+        Some(w) => w.record(d),
+        None => Ok(()),
+    };
     let mut snaps = Snapshots {
         dir: out.to_path_buf(),
         formats: case.output.formats.clone(),
@@ -270,10 +325,10 @@ fn run_dim<const D: usize>(
         files: vec![],
     };
     let initial = sim.diagnostics();
-    diag.record(&initial).map_err(|e| io_err(&diag_path, e))?;
+    record(&initial).map_err(|e| io_err(&diag_path, e))?;
     let mut loads = loads::LoadHistory::default();
     loads.record(&sim);
-    snaps.write(&sim)?;
+    snaps.write(&sim, comm)?;
     let t_end = case.time.t_end;
     let every = case.output.snapshot_every;
     let start = Instant::now();
@@ -296,18 +351,25 @@ fn run_dim<const D: usize>(
                 target = t_end;
             }
             sim.advance_to(target, |s| {
-                updates += s.sys.particles.len() as f64;
+                updates += match comm {
+                    Some(_) => initial.particles as f64,
+                    None => s.sys.particles.len() as f64,
+                };
                 let p = &s.sys.particles;
                 // Σ m|v| (SR: Σ ν|S|) and the mass of the fluid, in one pass
                 let momentum = |i: usize| match s.sys.relativistic {
                     Some(sr) => p.extra_vectors[sr.momentum][i].norm(),
                     None => p.vel[i].norm(),
                 };
-                let (scale, mass) = (0..p.len())
+                let (mut scale, mut mass) = (0..s.sys.owned())
                     .filter(|&i| p.body[i] == 0 && p.port[i] == 0)
                     .fold((0.0, 0.0), |(s, m), i| {
                         (s + p.mass[i] * momentum(i), m + p.mass[i])
                     });
+                if let Some(layout) = &s.layout {
+                    let t = layout.sum(&[scale, mass]).unwrap_or(vec![f64::NAN; 2]);
+                    (scale, mass) = (t[0], t[1]);
+                }
                 max_abs_momentum = max_abs_momentum.max(scale);
                 // every integrator applies g over the whole step: Σ_steps M g dt exactly (the
                 // step's own dt: last_dt skips the shortened steps that land on a target)
@@ -319,19 +381,21 @@ fn run_dim<const D: usize>(
                 if s.steps % case.output.diagnostics_every == 0 {
                     let d = s.diagnostics();
                     max_lorentz = max_lorentz.max(d.max_lorentz);
-                    if let Err(e) = diag.record(&d) {
+                    if let Err(e) = record(&d) {
                         diag_err.get_or_insert(io_err(&diag_path, e));
                     }
                     loads.record(s);
                 }
-                progress(&Progress {
-                    time: s.time,
-                    t_end,
-                    step: s.steps,
-                    dt: s.last_dt,
-                    particles: s.sys.particles.len(),
-                    rate: updates / start.elapsed().as_secs_f64().max(1e-9),
-                });
+                if root {
+                    progress(&Progress {
+                        time: s.time,
+                        t_end,
+                        step: s.steps,
+                        dt: s.last_dt,
+                        particles: s.sys.particles.len(),
+                        rate: updates / start.elapsed().as_secs_f64().max(1e-9),
+                    });
+                }
             })?;
             if sim.steps > case.time.max_steps {
                 return Err(RunError::Case(CaseError(format!(
@@ -342,23 +406,29 @@ fn run_dim<const D: usize>(
             if let Some(e) = diag_err.take() {
                 return Err(e);
             }
-            snaps.write(&sim)?;
+            snaps.write(&sim, comm)?;
             snap_index += 1;
         }
         Ok(())
     })();
     let last = sim.diagnostics();
-    let _ = diag.record(&last);
+    let _ = record(&last);
     loads.record(&sim);
     // the history so far is worth keeping even when the run failed
-    let written = loads.write(out);
+    let written = if root { loads.write(out) } else { Ok(()) };
     result?;
     written.map_err(RunError::Io)?;
+    let exchange = sim.layout.as_ref().map(|l| l.exchange());
+    if let Some(c) = comm {
+        ranks::gather_to_root(&mut sim, c)?;
+    }
     let wall = start.elapsed().as_secs_f64();
     let mut summary = RunSummary {
         case: case.case.name.clone(),
         dimension: D,
         particles: sim.sys.particles.len(),
+        ranks: exchange.map_or(1, |e| e.0),
+        exchange: exchange.map(|e| e.1),
         steps: sim.steps,
         time: sim.time,
         wall_seconds: wall,
@@ -443,6 +513,10 @@ fn run_dim<const D: usize>(
             .max(norm(&summary.gravity_impulse))
             .max(norm(&summary.wall_impulse));
         summary.momentum_residual = Some(r / scale.max(1e-300));
+    }
+    if !root {
+        // rank 0 checks and writes the summary of the whole run
+        return Ok(summary);
     }
     if let Some(v) = &case.verify {
         checks::verify(case, v, &sim, out, &mut summary)?;
