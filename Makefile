@@ -6,15 +6,21 @@ VENV := target/venv
 VPY := $(VENV)/bin/python
 BIN := target/release/sphfmu
 
-.PHONY: all build fmu demo test test-rust test-python test-import libclang venv bench bench-peer verify clean
+.PHONY: all build fmu demo test test-rust test-python test-import libclang openmpi venv bench bench-peer verify clean
+
+# Every build has the `mpi` feature (`mpirun -n R sphfmu run`), so that build, test and fmu
+# share one compiled tree (a feature set of its own would rebuild the solver and the FMU).
+# The FMU library does not link Open MPI (only the sphfmu binary calls it); the sphfmu binary
+# needs Open MPI's runtime, which `openmpi` installs with the headers the build probes.
+FEATURES := --features sphfmu/mpi
 
 all: build
 
 # Always the whole workspace, as `cargo test --workspace` builds it: cargo unifies features
 # over the packages it builds, and a root-only build would resolve serde, syn, memchr ... with
 # other features and compile the dependency tree a second time (minutes on 2 cores).
-build:
-	$(CARGO) build --release --workspace
+build: openmpi libclang
+	$(CARGO) build --release --workspace $(FEATURES)
 
 # The FMUs: target/fmu/sphfmu.fmu (FMI 3.0) and sphfmu-fmi2.fmu (FMI 2.0) for the demo's
 # free piston, and the same pair for the hydrostatic tank under target/fmu/closed-tank2d/, the
@@ -30,8 +36,8 @@ DEMO_CASE := models/free-piston2d.toml
 FMU_CASE ?=
 FMU_LIB := target/release/libsphfmu_fmu.so
 PACKAGE := target/release/sphfmu-package --lib $(FMU_LIB) --models models
-fmu:
-	$(CARGO) build --release --workspace
+fmu: openmpi libclang
+	$(CARGO) build --release --workspace $(FEATURES)
 	$(PACKAGE) --case $(DEMO_CASE) --out target/fmu
 	$(PACKAGE) --case models/closed-tank2d.toml --out target/fmu/closed-tank2d
 	$(PACKAGE) --case models/channel-ports2d.toml --out target/fmu/channel-ports2d
@@ -52,8 +58,8 @@ demo: fmu venv
 # Python tests (fmpy as the master) in a venv made here.
 test: test-rust test-python test-import
 
-test-rust:
-	$(CARGO) test --release --workspace
+test-rust: openmpi libclang
+	$(CARGO) test --release --workspace $(FEATURES)
 
 $(VENV)/.installed: tests/fmpy/requirements.txt
 	$(PYTHON) -m venv $(VENV)
@@ -75,6 +81,11 @@ test-import: fmu libclang
 # (tools/ensure_libclang.sh says what it looks for and why a glob is not enough).
 libclang:
 	tools/ensure_libclang.sh
+
+# Open MPI for the mpi feature (rsmpi probes mpicc; the tests start ranks with mpirun):
+# Debian's libopenmpi-dev and openmpi-bin, installed when missing (tools/ensure_openmpi.sh).
+openmpi:
+	tools/ensure_openmpi.sh
 
 # Throughput table (particle-updates/s, pair interactions/s, the force loop's own rate and
 # the neighbour share), 2D and 3D periodic boxes; live coupling on loopback (round trips with
@@ -101,7 +112,7 @@ bench-peer: build
 VERIFY_ARGS ?=
 verify: build fmu venv
 	$(VPY) tools/verify.py --jobs 2 $(VERIFY_ARGS)
-	$(CARGO) test --release -- --ignored --nocapture
+	$(CARGO) test --release $(FEATURES) -- --ignored --nocapture
 	SPHFMU_VERIFY=1 $(VPY) -m pytest tests/fmpy -q -s -m verify
 
 clean:

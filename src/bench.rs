@@ -3,7 +3,9 @@
 //! gradients, forces, integration).
 
 use crate::case::Case;
+use crate::parallel::comm::Comm;
 use serde::Serialize;
+use std::sync::Arc;
 use std::time::Instant;
 
 #[derive(Debug, Clone, Serialize)]
@@ -23,6 +25,14 @@ pub struct BenchRow {
     /// Share of the step spent on neighbour upkeep (list builds, validity checks, the cut of
     /// the working list with the gradient sums that ride on it).
     pub neighbour_share: f64,
+    /// Ranks the box was shared among (1: one process; `mpirun -n R sphfmu bench`).
+    pub ranks: usize,
+    /// Distributed runs, rank 0's figures: bytes it sent per step, the share of its step time
+    /// spent in exchanges (waiting for the other ranks included), and its halo copies
+    /// against its own particles.
+    pub bytes_per_step: f64,
+    pub exchange_share: f64,
+    pub halo_per_owned: f64,
 }
 
 /// Case text for an N-particle periodic box in dimension d.
@@ -63,12 +73,22 @@ seed = 7
     )
 }
 
-pub fn run_one<const D: usize>(n: usize, steps: u64, kernel: &str) -> Result<BenchRow, String> {
+pub fn run_one<const D: usize>(
+    n: usize,
+    steps: u64,
+    kernel: &str,
+    ranks: Option<Arc<dyn Comm>>,
+) -> Result<BenchRow, String> {
     let case = Case::parse(&box_case(D, n, kernel)).map_err(|e| e.0)?;
-    let mut sim = case.build::<D>().map_err(|e| e.0)?;
+    let mut sim = match ranks {
+        Some(comm) => case.distributed::<D>(comm).map_err(|e| e.0)?,
+        None => case.build::<D>().map_err(|e| e.0)?,
+    };
     // warm-up step (allocations, first list build)
     sim.step(f64::INFINITY).map_err(|e| e.to_string())?;
     sim.sys.stats = Default::default();
+    let exchanged = |s: &crate::sim::Simulation<D>| s.layout.as_ref().map(|l| l.exchange());
+    let before = exchanged(&sim);
     let mut force_pairs = 0u64;
     let mut all_pairs = 0u64;
     let t0 = Instant::now();
@@ -79,13 +99,24 @@ pub fn run_one<const D: usize>(n: usize, steps: u64, kernel: &str) -> Result<Ben
         all_pairs += sim.sys.stats.total_pairs;
     }
     let secs = t0.elapsed().as_secs_f64();
+    let after = exchanged(&sim);
+    // every particle, on every rank
+    let np = sim.diagnostics().particles;
     let st = &sim.sys.stats;
     eprintln!(
         "{D}D N={}: neighbours {:.2} s, density/h {:.2} s ({:.2} Newton iterations/particle), gradients {:.2} s, forces {:.2} s, total {:.2} s",
         sim.sys.particles.len(), st.seconds_neighbours, st.seconds_density, st.h_iterations, st.seconds_gradients, st.seconds_forces, secs
     );
-    let np = sim.sys.particles.len();
     let threads = rayon::current_num_threads();
+    let (ranks, bytes, exchange, halo) = match (before, after) {
+        (Some((r, b)), Some((_, a))) => (
+            r,
+            (a.bytes_sent - b.bytes_sent) as f64 / steps as f64,
+            (a.seconds - b.seconds) / secs,
+            a.halo_particles as f64 / sim.sys.owned().max(1) as f64,
+        ),
+        _ => (1, 0.0, 0.0, 0.0),
+    };
     Ok(BenchRow {
         dimension: D,
         particles: np,
@@ -101,6 +132,10 @@ pub fn run_one<const D: usize>(n: usize, steps: u64, kernel: &str) -> Result<Ben
             / st.seconds_forces.max(1e-12)
             / threads as f64,
         neighbour_share: st.seconds_neighbours / secs,
+        ranks,
+        bytes_per_step: bytes,
+        exchange_share: exchange,
+        halo_per_owned: halo,
     })
 }
 
@@ -109,14 +144,15 @@ pub fn run_table(
     dims: &[usize],
     steps: u64,
     kernel: &str,
+    ranks: Option<Arc<dyn Comm>>,
 ) -> Result<Vec<BenchRow>, String> {
     let mut rows = Vec::new();
     for &d in dims {
         for &n in sizes {
             let row = match d {
-                1 => run_one::<1>(n, steps, kernel)?,
-                2 => run_one::<2>(n, steps, kernel)?,
-                3 => run_one::<3>(n, steps, kernel)?,
+                1 => run_one::<1>(n, steps, kernel, ranks.clone())?,
+                2 => run_one::<2>(n, steps, kernel, ranks.clone())?,
+                3 => run_one::<3>(n, steps, kernel, ranks.clone())?,
                 _ => return Err(format!("--dims: must be 1, 2 or 3, got {d}")),
             };
             eprintln!(
@@ -131,22 +167,26 @@ pub fn run_table(
 
 pub fn format_table(rows: &[BenchRow]) -> String {
     let mut s = String::from(
-        "| dim | particles | kernel | neighbours | threads | steps | particle-updates/s | force pairs/s | all pairs/s | force loop pairs/s/thread | neighbour share |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| dim | particles | kernel | neighbours | ranks × threads | steps | particle-updates/s | force pairs/s | all pairs/s | force loop pairs/s/thread | neighbour share | bytes sent/step | exchange share | halo/owned |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         s.push_str(&format!(
-            "| {}D | {} | {} | {:.1} | {} | {} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.0} % |\n",
+            "| {}D | {} | {} | {:.1} | {} × {} | {} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.0} % | {:.3e} | {:.0} % | {:.2} |\n",
             r.dimension,
             r.particles,
             r.kernel,
             r.neighbours,
+            r.ranks,
             r.threads,
             r.steps,
             r.particle_updates_per_second,
             r.force_pairs_per_second,
             r.all_pairs_per_second,
             r.force_loop_pairs_per_second_per_thread,
-            100.0 * r.neighbour_share
+            100.0 * r.neighbour_share,
+            r.bytes_per_step,
+            100.0 * r.exchange_share,
+            r.halo_per_owned
         ));
     }
     s

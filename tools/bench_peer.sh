@@ -25,5 +25,5 @@ if [[ ! -f $VENV/.installed ]]; then
   $VENV/bin/pip install --quiet --no-build-isolation pysph==1.0b2
   touch $VENV/.installed
 fi
-cargo build --release --workspace --quiet
+cargo build --release --workspace --features sphfmu/mpi --quiet
 exec $VENV/bin/python tools/bench_peer.py --threads "$THREADS" --schemes "$SCHEMES"

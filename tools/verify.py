@@ -139,7 +139,8 @@ def execute(run: Run, threads: int, reuse: bool = False) -> Run:
 
 
 def execute_test(filt: str, ignored: bool) -> tuple[bool, str, float]:
-    cmd = ["cargo", "test", "--release", "-p", "sphfmu", "--test", "all", "-q", filt, "--", "--nocapture", "--exact"]
+    # the Makefile's features, so the test binary is the one `make test` already built
+    cmd = ["cargo", "test", "--release", "-p", "sphfmu", "--features", "mpi", "--test", "all", "-q", filt, "--", "--nocapture", "--exact"]
     if ignored:
         cmd.append("--ignored")
     t0 = time.time()
@@ -394,7 +395,7 @@ def main() -> int:
             row.update(
                 verdict="reproduced" if ok and m else "not reproduced",
                 ours=figure + ("" if ok else " — the test FAILED"),
-                command=f"cargo test --release -p sphfmu --test all {t['filter']} -- --exact --nocapture"
+                command=f"cargo test --release -p sphfmu --features mpi --test all {t['filter']} -- --exact --nocapture"
                 + (" --ignored" if t.get("ignored") else ""),
                 cost=f"{secs:.0f} s",
             )

@@ -452,6 +452,12 @@ fn main() -> ExitCode {
             json,
             state,
         } => {
+            let ranks = match sphfmu::parallel::launched() {
+                Ok(r) => r,
+                Err(e) => return fail(2, format!("bench: {e}")),
+            };
+            let threads = threads.or(ranks.as_ref().and(sphfmu::parallel::threads_per_rank()));
+            let root = ranks.as_ref().is_none_or(|r| r.rank() == 0);
             if let Err(e) = set_threads(threads) {
                 return fail(2, e);
             }
@@ -474,7 +480,8 @@ fn main() -> ExitCode {
                 }
                 return ExitCode::SUCCESS;
             }
-            match sphfmu::bench::run_table(&sizes, &dims, steps, &kernel) {
+            match sphfmu::bench::run_table(&sizes, &dims, steps, &kernel, ranks) {
+                Ok(_) if !root => ExitCode::SUCCESS,
                 Ok(rows) => {
                     println!("{}", sphfmu::bench::format_table(&rows));
                     if let Some(p) = json {

@@ -336,7 +336,10 @@ impl Case {
 
     /// `[[field]] stage = "density"`: set from the scheme's density, then evaluate again;
     /// repeated while the density moves (X = P^k volume elements make it depend on P).
-    fn density_stage<const D: usize>(&self, mut sim: Simulation<D>) -> Result<Simulation<D>, CaseError> {
+    fn density_stage<const D: usize>(
+        &self,
+        mut sim: Simulation<D>,
+    ) -> Result<Simulation<D>, CaseError> {
         for _ in 0..MAX_DENSITY_STAGE_PASSES {
             let before = sim.sys.particles.rho.clone();
             if !fields::apply_after_density(&self.fields, &mut sim.sys)? {
@@ -351,7 +354,9 @@ impl Case {
                 .fold(0.0, f64::max);
             if let Some(layout) = &sim.layout {
                 // every rank stops at the same pass: the largest change over the ranks
-                moved = -layout.agree_dt(-moved).map_err(|e| CaseError(format!("initial state: {e}")))?;
+                moved = -layout
+                    .agree_dt(-moved)
+                    .map_err(|e| CaseError(format!("initial state: {e}")))?;
             }
             if moved < 1e-13 {
                 break;

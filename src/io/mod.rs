@@ -232,11 +232,19 @@ mod tests {
         let text = std::fs::read_to_string(&path).expect("read");
         let arrays = text.matches("<DataArray").count();
         // TIME, the points and the three cell arrays besides the point data
-        assert_eq!(arrays, VTU_ARRAYS.len() + 5, "a VTU array missing from VTU_ARRAYS");
+        assert_eq!(
+            arrays,
+            VTU_ARRAYS.len() + 5,
+            "a VTU array missing from VTU_ARRAYS"
+        );
         for (name, kind, n) in VTU_ARRAYS {
             let tag = format!("type=\"{kind}\" Name=\"{name}\"");
             assert!(text.contains(&tag), "{tag} not in the VTU");
-            assert_eq!(n == 3, text.contains(&format!("{tag} NumberOfComponents=\"3\"")), "{name}");
+            assert_eq!(
+                n == 3,
+                text.contains(&format!("{tag} NumberOfComponents=\"3\"")),
+                "{name}"
+            );
         }
     }
 }

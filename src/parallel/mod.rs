@@ -401,7 +401,10 @@ pub fn launched() -> Result<Option<Arc<dyn Comm>>, String> {
 /// Worker threads per rank when none are asked for: the cores shared among the ranks on
 /// this machine (Open MPI's `OMPI_COMM_WORLD_LOCAL_SIZE`), at least one.
 pub fn threads_per_rank() -> Option<usize> {
-    let local: usize = std::env::var("OMPI_COMM_WORLD_LOCAL_SIZE").ok()?.parse().ok()?;
+    let local: usize = std::env::var("OMPI_COMM_WORLD_LOCAL_SIZE")
+        .ok()?
+        .parse()
+        .ok()?;
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     Some((cores / local.max(1)).max(1))
 }

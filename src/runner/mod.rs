@@ -5,11 +5,11 @@ use crate::case::{Case, CaseError, SnapshotFormat};
 use crate::io::{self, DiagnosticsWriter};
 use crate::parallel::comm::Comm;
 use crate::sim::{Simulation, SolverError};
-use std::sync::Arc;
 use crate::verify::radial::RadialErrors;
 use crate::verify::ShockTubeErrors;
 use std::fmt;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 mod checks;

@@ -12,7 +12,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 def sphfmu_bin():
     exe = ROOT / "target" / "release" / "sphfmu"
     if not exe.exists():
-        subprocess.run(["cargo", "build", "--release", "--bin", "sphfmu"], cwd=ROOT, check=True)
+        subprocess.run(["cargo", "build", "--release", "--features", "mpi", "--bin", "sphfmu"], cwd=ROOT, check=True)
     return str(exe)
 
 

@@ -197,8 +197,10 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
     }
 
     fn evaluate(&mut self, sys: &mut System<D>) -> Result<(), SchemeError> {
-        // Newton solve for h only when no h_ideal exists yet (the first evaluation)
-        let first = self.h_next.len() != sys.particles.len();
+        // Newton solve for h only when no h_ideal exists yet (the first evaluation). Not "when
+        // the particle count changed": ports change it, and so does a distributed run's halo
+        // at every step, which made the solve (and so the particles) depend on the ranks.
+        let first = self.h_next.is_empty();
         let (vol, coef, kern) = self.state(sys, first);
         let t0 = std::time::Instant::now();
         let grads = velocity_gradients(sys, &vol, &coef, &kern);
