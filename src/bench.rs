@@ -121,7 +121,8 @@ pub fn run_one<const D: usize>(
         dimension: D,
         particles: np,
         kernel: sim.sys.kernel.kernel.to_string_name(),
-        neighbours: sim.sys.stats.force_pairs as f64 / np as f64,
+        // this rank's pairs per particle it holds (its halo copies included)
+        neighbours: sim.sys.stats.force_pairs as f64 / sim.sys.particles.len().max(1) as f64,
         steps,
         seconds: secs,
         threads,

@@ -78,8 +78,10 @@ fn first_difference(a: &Particles<2>, b: &Particles<2>) -> Option<String> {
 }
 
 /// The violent random periodic box (a disc crossing a moving background) after 50 steps on
-/// 1, 2 and 3 ranks: equal to the bit. A halo one support deep (thinner than any of these
-/// schemes needs) must change them, or the comparison could not fail.
+/// 1, 2 and 3 ranks: equal to the bit. A halo of the skin alone (no kernel support deep)
+/// must change them, or the comparison could not fail. (Measured: with the skin, one
+/// support already gives the same particles for CRKSPH and F1 on this box, not for
+/// standard SPH; the schemes' depths, 3 and 4, keep a margin for sharper cases.)
 fn same_on_1_2_3_ranks(scheme: &str) {
     let text = random_box(scheme, "", (0.04, 0.028));
     let (one, _, _) = run_on(&text, 1, 50);
@@ -89,10 +91,10 @@ fn same_on_1_2_3_ranks(scheme: &str) {
             panic!("{scheme}: 1 rank against {ranks}: {d}");
         }
     }
-    let (thin, _, _) = run_with(&text, 2, 50, Some(1));
+    let (thin, _, _) = run_with(&text, 2, 50, Some(0));
     assert!(
         first_difference(&one, &thin).is_some(),
-        "{scheme}: a halo one support deep gave the same particles"
+        "{scheme}: a halo of the skin alone gave the same particles"
     );
 }
 

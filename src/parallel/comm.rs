@@ -36,6 +36,8 @@ pub trait Reduce {
     /// Element-wise sums over the ranks, added in rank order.
     fn sum(&self, x: &[f64]) -> Result<Vec<f64>, CommError>;
     fn min(&self, x: f64) -> Result<f64, CommError>;
+    /// Element-wise maxima over the ranks.
+    fn max_each(&self, x: &[f64]) -> Result<Vec<f64>, CommError>;
     fn max(&self, x: f64) -> Result<f64, CommError>;
     /// Whether every rank passed `true`.
     fn all(&self, ok: bool) -> Result<bool, CommError>;
@@ -43,20 +45,7 @@ pub trait Reduce {
 
 impl<C: Comm + ?Sized> Reduce for C {
     fn sum(&self, x: &[f64]) -> Result<Vec<f64>, CommError> {
-        let parts = self.all_gather(f64_bytes(x))?;
-        let mut out = vec![0.0; x.len()];
-        for part in parts {
-            let v = bytes_f64(&part);
-            if v.len() != out.len() {
-                return Err(CommError(format!(
-                    "sum over ranks of {} numbers met a rank with {}",
-                    out.len(),
-                    v.len()
-                )));
-            }
-            out.iter_mut().zip(v).for_each(|(o, x)| *o += x);
-        }
-        Ok(out)
+        fold_each(self, x, 0.0, |a, b| a + b)
     }
     fn min(&self, x: f64) -> Result<f64, CommError> {
         let all = self.all_gather(f64_bytes(&[x]))?;
@@ -64,6 +53,9 @@ impl<C: Comm + ?Sized> Reduce for C {
             .iter()
             .flat_map(|b| bytes_f64(b))
             .fold(f64::INFINITY, f64::min))
+    }
+    fn max_each(&self, x: &[f64]) -> Result<Vec<f64>, CommError> {
+        fold_each(self, x, f64::NEG_INFINITY, f64::max)
     }
     fn max(&self, x: f64) -> Result<f64, CommError> {
         let all = self.all_gather(f64_bytes(&[x]))?;
@@ -76,6 +68,29 @@ impl<C: Comm + ?Sized> Reduce for C {
         let all = self.all_gather(vec![ok as u8])?;
         Ok(all.iter().all(|b| b == &[1]))
     }
+}
+
+/// Every rank's `x` folded element-wise with `op` from `init`, in rank order.
+fn fold_each<C: Comm + ?Sized>(
+    comm: &C,
+    x: &[f64],
+    init: f64,
+    op: impl Fn(f64, f64) -> f64,
+) -> Result<Vec<f64>, CommError> {
+    let parts = comm.all_gather(f64_bytes(x))?;
+    let mut out = vec![init; x.len()];
+    for part in parts {
+        let v = bytes_f64(&part);
+        if v.len() != out.len() {
+            return Err(CommError(format!(
+                "a reduction over ranks of {} numbers met a rank with {}",
+                out.len(),
+                v.len()
+            )));
+        }
+        out.iter_mut().zip(v).for_each(|(o, x)| *o = op(*o, x));
+    }
+    Ok(out)
 }
 
 pub fn f64_bytes(x: &[f64]) -> Vec<u8> {

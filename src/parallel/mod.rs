@@ -36,6 +36,11 @@ pub const BALANCE_EVERY: u64 = 16;
 /// Growth of the largest h within one step that the halo allows for (the h solve's
 /// prediction alone may reach 20 %); a step that grows it further is reported, not hidden.
 pub const H_GROWTH: f64 = 1.25;
+/// The halo is kept over steps while the particles' motion since it was built fits in its
+/// skin, this fraction of a kernel support wide (as the neighbour list's own skin,
+/// `smoothing::SKIN`): with the same particles in the same order the neighbour lists stay
+/// valid, and a step costs no migration and no list rebuild.
+pub const HALO_SKIN: f64 = 0.15;
 
 /// The particles of a case shared among ranks: [`Layout`] of a distributed [`Simulation`].
 pub struct Decomposition<const D: usize> {
@@ -45,6 +50,11 @@ pub struct Decomposition<const D: usize> {
     steps: u64,
     /// The largest h the current halo allows for.
     h_allowed: f64,
+    /// The current halo's allowance for motion: two particles may have approached by this
+    /// much since it was built.
+    skin: f64,
+    /// The owned particles' positions when the halo was built (empty: build it).
+    built_at: Vec<Vector<D>>,
     /// The halo allows for at least this h (the first evaluation's, estimated at the start).
     h_floor: f64,
 }
@@ -118,6 +128,8 @@ pub fn start_with_halo<const D: usize>(
         steps: 0,
         h_allowed: 0.0,
         h_floor: h_first,
+        skin: 0.0,
+        built_at: vec![],
     };
     let fail = |message: String| SolverError::Scheme {
         message: format!("distributed run: {message}"),
@@ -153,13 +165,16 @@ impl<const D: usize> Decomposition<D> {
             speed = speed.max(p.vel[i].norm());
             accel = accel.max(p.acc[i].norm());
         }
-        let h = comm.max(h).map_err(|e| e.to_string())?.max(floor);
-        let speed = comm.max(speed).map_err(|e| e.to_string())?;
-        let accel = comm.max(accel).map_err(|e| e.to_string())?;
+        let top = comm
+            .max_each(&[h, speed, accel])
+            .map_err(|e| e.to_string())?;
+        let h = top[0].max(floor);
         self.h_allowed = H_GROWTH * h;
-        // two particles approach by at most twice the largest displacement in the step
-        let moved = 2.0 * 1.1 * (speed * dt + 0.5 * accel * dt * dt);
-        let width = self.depth as f64 * sys.kernel.radius(self.h_allowed) + moved;
+        // two particles approach by at most twice the largest displacement: the step's, or
+        // the skin's worth of steps
+        let step = step_motion(top[1], top[2], dt);
+        self.skin = 2.0 * step.max(HALO_SKIN * sys.kernel.radius(h));
+        let width = self.depth as f64 * sys.kernel.radius(self.h_allowed) + self.skin;
         let mut send = vec![Vec::new(); ranks];
         for i in 0..own {
             for (r, list) in send.iter_mut().enumerate() {
@@ -178,6 +193,7 @@ impl<const D: usize> Decomposition<D> {
         }
         sys.halo = sys.particles.len() - own;
         sys.reset_neighbours();
+        self.built_at = sys.particles.pos[..own].to_vec();
         *self.link.plan.lock().unwrap_or_else(|e| e.into_inner()) = halo::HaloPlan { send, recv };
         self.link
             .stats
@@ -269,6 +285,11 @@ impl<const D: usize> Decomposition<D> {
     }
 }
 
+/// How far a particle moves in one step of `dt` at most, with a 10 % margin: |v| dt + ½|a| dt².
+fn step_motion(speed: f64, accel: f64, dt: f64) -> f64 {
+    1.1 * (speed * dt + 0.5 * accel * dt * dt)
+}
+
 impl<const D: usize> Layout<D> for Decomposition<D> {
     fn agree_dt(&self, local: f64) -> Result<f64, String> {
         self.comm().min(local).map_err(|e| e.to_string())
@@ -285,20 +306,41 @@ impl<const D: usize> Layout<D> for Decomposition<D> {
     }
 
     fn before_step(&mut self, sys: &mut System<D>, dt: f64) -> Result<(), String> {
-        // the previous step's h must have stayed within what its halo allowed for
         let own = sys.owned();
-        let h = sys.particles.h[..own].iter().cloned().fold(0.0, f64::max);
-        let h = self.comm().max(h).map_err(|e| e.to_string())?;
+        let p = &sys.particles;
+        let (mut h, mut speed, mut accel, mut moved) = (0.0_f64, 0.0_f64, 0.0_f64, 0.0_f64);
+        let built = self.built_at.len() == own;
+        for i in 0..own {
+            h = h.max(p.h[i]);
+            speed = speed.max(p.vel[i].norm());
+            accel = accel.max(p.acc[i].norm());
+            if built {
+                moved = moved.max(sys.domain.separation(&p.pos[i], &self.built_at[i], 0).norm());
+            }
+        }
+        let top = self
+            .comm()
+            .max_each(&[h, speed, accel, moved, (!built) as u8 as f64])
+            .map_err(|e| e.to_string())?;
+        let (h, moved, any_unbuilt) = (top[0], top[3], top[4] > 0.0);
+        // the steps since the halo was built kept h within what it allowed for
         if self.h_allowed > 0.0 && h > self.h_allowed {
             return Err(format!(
-                "the largest smoothing length grew to {h:.4e} within one step, past the {:.4e} its halo allowed for ({H_GROWTH} times the step's start)",
+                "the largest smoothing length grew to {h:.4e}, past the {:.4e} its halo allowed for ({H_GROWTH} times its value when the halo was built)",
                 self.h_allowed
             ));
         }
-        if self.steps > 0 && self.steps % BALANCE_EVERY == 0 && self.comm().size() > 1 {
+        self.steps += 1;
+        let balance_due = self.steps % BALANCE_EVERY == 0 && self.comm().size() > 1;
+        // keep the halo while this step's motion still fits in its skin and h has room to
+        // grow by a step's worth (10 %)
+        let step = step_motion(top[1], top[2], dt);
+        if !any_unbuilt && !balance_due && 2.0 * (moved + step) <= self.skin && 1.1 * h <= self.h_allowed {
+            return Ok(());
+        }
+        if balance_due {
             self.rebalance(sys)?;
         }
-        self.steps += 1;
         self.migrate(sys)?;
         self.build_halo(sys, dt)
     }
