@@ -48,7 +48,10 @@ fn run_with(
                 let moved = sim.layout.as_ref().map_or(0, |l| l.exchange().1.migrated);
                 if ranks > 1 && comm.rank() == 0 {
                     // the comparison covers particles changing hands, not only halos
-                    assert!(moved > 0, "no particle left rank 0's region in {steps} steps");
+                    assert!(
+                        moved > 0,
+                        "no particle left rank 0's region in {steps} steps"
+                    );
                 }
                 let all = parallel::gather_particles(&sim, &*comm).expect("gather");
                 (all, d0, d1)

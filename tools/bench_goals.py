@@ -151,6 +151,23 @@ def table_goals(g, table):
               spread <= 0.15, f"largest deviation {100 * spread:.0f} %")
 
 
+def mpi_goals(g, table, mpi):
+    """2 ranks x 1 thread (mpirun) against 1 rank x 2 threads on the 1e6-particle 3D box."""
+    pick = lambda rows: next((r for r in rows or [] if r["dimension"] == 3 and r["particles"] == 1000000), None)
+    one, two = pick(table), pick(mpi)
+    if not (one and two and two.get("ranks", 1) > 1):
+        g.add("MPI: 2 ranks x 1 thread / 1 rank x 2 threads, 3D 1e6", "-", "target/bench-mpi.json",
+              "report (docs/scaling.md)", None, "run `make bench` (mpirun) first")
+        return
+    ratio = two["particle_updates_per_second"] / one["particle_updates_per_second"]
+    g.add("MPI: 2 ranks x 1 thread / 1 rank x 2 threads, 3D 1e6", f"{ratio:.2f}x",
+          f"{two['particle_updates_per_second']:.3e} / {one['particle_updates_per_second']:.3e} particle-updates/s",
+          ">= 1/(1 + halo/owned) (the halo's redundant work alone)",
+          ratio >= 1.0 / (1.0 + two["halo_per_owned"]),
+          f"{two['bytes_per_step']:.2e} bytes sent per step by rank 0, {100 * two['exchange_share']:.0f} % of its step "
+          f"in exchanges, halo/owned {two['halo_per_owned']:.2f}")
+
+
 def peer_goals(g, peer):
     aims = [("standard", "psph", 20.0, "our standard SPH / PySPH PSPH"),
             ("psph", "psph", 10.0, "our PSPH / PySPH PSPH"),
@@ -252,11 +269,13 @@ def main():
     ap.add_argument("--out", default=os.path.join(ROOT, "target", "bench-goals.md"))
     ap.add_argument("--table", default=os.path.join(ROOT, "target", "bench.json"))
     ap.add_argument("--peer", default=os.path.join(ROOT, "target", "bench-peer.json"))
+    ap.add_argument("--mpi", default=os.path.join(ROOT, "target", "bench-mpi.json"))
     a = ap.parse_args()
     model = cpu_model()
     baselines = json.load(open(os.path.join(ROOT, "tools", "bench_baselines.json")))
     g = Goals()
     table_goals(g, load_json(a.table))
+    mpi_goals(g, load_json(a.table), load_json(a.mpi))
     peer_goals(g, load_json(a.peer))
     if not a.skip_runs:
         with tempfile.TemporaryDirectory() as tmp:

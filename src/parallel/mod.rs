@@ -315,7 +315,11 @@ impl<const D: usize> Layout<D> for Decomposition<D> {
             speed = speed.max(p.vel[i].norm());
             accel = accel.max(p.acc[i].norm());
             if built {
-                moved = moved.max(sys.domain.separation(&p.pos[i], &self.built_at[i], 0).norm());
+                moved = moved.max(
+                    sys.domain
+                        .separation(&p.pos[i], &self.built_at[i], 0)
+                        .norm(),
+                );
             }
         }
         let top = self
@@ -335,7 +339,11 @@ impl<const D: usize> Layout<D> for Decomposition<D> {
         // keep the halo while this step's motion still fits in its skin and h has room to
         // grow by a step's worth (10 %)
         let step = step_motion(top[1], top[2], dt);
-        if !any_unbuilt && !balance_due && 2.0 * (moved + step) <= self.skin && 1.1 * h <= self.h_allowed {
+        if !any_unbuilt
+            && !balance_due
+            && 2.0 * (moved + step) <= self.skin
+            && 1.1 * h <= self.h_allowed
+        {
             return Ok(());
         }
         if balance_due {
