@@ -77,8 +77,9 @@ test-python: build fmu venv
 test-import: fmu libclang
 	cd fmu/import-test && CARGO_TARGET_DIR=$(CURDIR)/target/import-test $(CARGO) test --release
 
-# libclang for bindgen: Debian's libclang-dev, installed when what bindgen loads is missing
-# (tools/ensure_libclang.sh says what it looks for and why a glob is not enough).
+# libclang for bindgen (rsmpi's mpi-sys, rust-fmi's fmi-sys): Debian's libclang-dev, installed
+# when what bindgen loads is missing (tools/ensure_libclang.sh says what it looks for and why a
+# glob is not enough).
 libclang:
 	tools/ensure_libclang.sh
 

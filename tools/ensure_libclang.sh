@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Make sure bindgen (run by rust-fmi's fmi-sys in `make test-import`) finds a libclang it can
-# load, and install Debian's libclang-dev when it cannot.
+# Make sure bindgen (run by rsmpi's mpi-sys in every build and by rust-fmi's fmi-sys in
+# `make test-import`) finds a libclang it can load, and install Debian's libclang-dev when it
+# cannot.
 #
 # What counts is what clang-sys (bindgen's loader) accepts: a file named libclang.so,
 # libclang-N.so, libclang.so.N or libclang-N.so.N in LIBCLANG_PATH, `llvm-config --libdir`,
@@ -40,7 +41,7 @@ if [ "${1:-}" = "--check" ]; then
   exit 1
 fi
 
-echo "libclang: $missing; installing Debian's libclang-dev (rust-fmi's fmi-sys runs bindgen at build time)"
+echo "libclang: $missing; installing Debian's libclang-dev (rsmpi's mpi-sys and rust-fmi's fmi-sys run bindgen at build time)"
 sudo=""
 [ "$(id -u)" = 0 ] || sudo=sudo
 export DEBIAN_FRONTEND=noninteractive

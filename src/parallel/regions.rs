@@ -150,3 +150,67 @@ impl<const D: usize> Regions<D> {
         sum.sqrt()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::domain::BoundaryKind::{Open, Periodic};
+
+    fn domain(kind: [BoundaryKind; 2]) -> Domain<2> {
+        Domain {
+            lo: [0.0, 0.0],
+            hi: [2.0, 1.0],
+            kind,
+        }
+    }
+
+    /// A 20 × 10 lattice on [0, 2) × [0, 1).
+    fn lattice(cost: impl Fn(&Vector<2>) -> f64) -> Vec<(Vector<2>, f64)> {
+        (0..200)
+            .map(|i| {
+                let x = Vector::<2>::new(0.05 + 0.1 * (i % 20) as f64, 0.05 + 0.1 * (i / 20) as f64);
+                (x, cost(&x))
+            })
+            .collect()
+    }
+
+    /// Every point has exactly one owner, and the cost is split as evenly as the points allow.
+    #[test]
+    fn bisection_tiles_space_and_balances_cost() {
+        // the left half costs three times the right: the cut moves left of x = 1
+        let pts = lattice(|x| if x[0] < 1.0 { 3.0 } else { 1.0 });
+        for ranks in [1, 2, 3, 4, 7] {
+            let r = Regions::bisect(&pts, ranks, &domain([Open, Open]));
+            let mut load = vec![0.0; ranks];
+            for (x, c) in &pts {
+                let owners: Vec<usize> = (0..ranks)
+                    .filter(|&k| (0..2).all(|a| r.lo[k][a] <= x[a] && x[a] < r.hi[k][a]))
+                    .collect();
+                assert_eq!(owners.len(), 1, "{ranks} ranks: point {x:?} owned by {owners:?}");
+                assert_eq!(r.owner(x), owners[0]);
+                load[owners[0]] += c;
+            }
+            let mean = load.iter().sum::<f64>() / ranks as f64;
+            let worst = load.iter().cloned().fold(0.0, f64::max);
+            // one lattice column (10 points of cost ≤ 3) is the granularity of a cut
+            assert!(worst <= mean + 30.0, "{ranks} ranks: loads {load:?}");
+        }
+    }
+
+    /// Distances wrap on periodic axes and not on open ones; inside a region it is zero.
+    #[test]
+    fn distance_wraps_on_periodic_axes() {
+        let pts = lattice(|_| 1.0);
+        let periodic = Regions::bisect(&pts, 2, &domain([Periodic, Periodic]));
+        let open = Regions::bisect(&pts, 2, &domain([Open, Open]));
+        // the cut is at x = 1: rank 0 owns [0, 1), rank 1 [1, 2)
+        assert_eq!(periodic.owner(&Vector::<2>::new(0.5, 0.5)), 0);
+        assert_eq!(periodic.hi[0][0], 1.0);
+        let near_right_face = Vector::<2>::new(1.95, 0.5);
+        assert_eq!(periodic.distance(1, &near_right_face), 0.0);
+        // across the periodic face at x = 2 it is 0.05 from rank 0's region
+        assert!((periodic.distance(0, &near_right_face) - 0.05).abs() < 1e-12);
+        // on an open axis the way round does not exist: 0.95 to the cut
+        assert!((open.distance(0, &near_right_face) - 0.95).abs() < 1e-12);
+    }
+}
