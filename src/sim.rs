@@ -207,11 +207,7 @@ impl<const D: usize> Simulation<D> {
     }
 
     fn check_finite(&self) -> Result<(), SolverError> {
-        if let Some((i, field)) = self
-            .sys
-            .first_non_finite()
-            .filter(|&(i, _)| i < self.sys.owned())
-        {
+        if let Some((i, field)) = self.sys.first_non_finite() {
             return Err(SolverError::NonFinite {
                 field,
                 particle: self.sys.particles.id[i],

@@ -499,10 +499,11 @@ impl<const D: usize> System<D> {
         self.apply_wall_condition();
     }
 
-    /// Index of the first particle with a non-finite evolved or derived field, if any.
+    /// Index of the first own particle with a non-finite evolved or derived field, if any
+    /// (halo copies are their owners' to check).
     pub fn first_non_finite(&self) -> Option<(usize, &'static str)> {
         let p = &self.particles;
-        (0..p.len()).find_map(|i| {
+        (0..self.owned()).find_map(|i| {
             if !p.pos[i].iter().all(|x| x.is_finite()) {
                 Some((i, "position"))
             } else if !p.vel[i].iter().all(|x| x.is_finite()) {

@@ -168,7 +168,8 @@ mod tests {
     fn lattice(cost: impl Fn(&Vector<2>) -> f64) -> Vec<(Vector<2>, f64)> {
         (0..200)
             .map(|i| {
-                let x = Vector::<2>::new(0.05 + 0.1 * (i % 20) as f64, 0.05 + 0.1 * (i / 20) as f64);
+                let x =
+                    Vector::<2>::new(0.05 + 0.1 * (i % 20) as f64, 0.05 + 0.1 * (i / 20) as f64);
                 (x, cost(&x))
             })
             .collect()
@@ -186,7 +187,11 @@ mod tests {
                 let owners: Vec<usize> = (0..ranks)
                     .filter(|&k| (0..2).all(|a| r.lo[k][a] <= x[a] && x[a] < r.hi[k][a]))
                     .collect();
-                assert_eq!(owners.len(), 1, "{ranks} ranks: point {x:?} owned by {owners:?}");
+                assert_eq!(
+                    owners.len(),
+                    1,
+                    "{ranks} ranks: point {x:?} owned by {owners:?}"
+                );
                 assert_eq!(r.owner(x), owners[0]);
                 load[owners[0]] += c;
             }
