@@ -42,13 +42,5 @@ if [ "${1:-}" = "--check" ]; then
 fi
 
 echo "libclang: $missing; installing Debian's libclang-dev (rsmpi's mpi-sys and rust-fmi's fmi-sys run bindgen at build time)"
-sudo=""
-[ "$(id -u)" = 0 ] || sudo=sudo
-export DEBIAN_FRONTEND=noninteractive
-if ! $sudo apt-get install -y -q libclang-dev; then
-  $sudo apt-get update -q && $sudo apt-get install -y -q libclang-dev || {
-    echo "libclang: could not install libclang-dev; install it (apt-get install libclang-dev) and rerun" >&2
-    exit 1
-  }
-fi
+"$(dirname "$0")/apt_install.sh" "libclang" libclang-dev
 exec "$0" --check

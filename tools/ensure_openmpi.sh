@@ -17,13 +17,5 @@ if [ "${1:-}" = "--check" ]; then
   exit 1
 fi
 echo "Open MPI: missing; installing Debian's libopenmpi-dev and openmpi-bin (the mpi feature)"
-sudo=""
-[ "$(id -u)" = 0 ] || sudo=sudo
-export DEBIAN_FRONTEND=noninteractive
-if ! $sudo apt-get install -y -q libopenmpi-dev openmpi-bin; then
-  $sudo apt-get update -q && $sudo apt-get install -y -q libopenmpi-dev openmpi-bin || {
-    echo "Open MPI: could not install; install it (apt-get install libopenmpi-dev openmpi-bin) and rerun" >&2
-    exit 1
-  }
-fi
+"$(dirname "$0")/apt_install.sh" "Open MPI" libopenmpi-dev openmpi-bin
 exec "$0" --check
