@@ -112,6 +112,9 @@ pub trait Layout<const D: usize>: Send + Sync {
     /// Before a step of `dt`: hand particles that left this rank's region to their new
     /// owners, rebalance when due, and build the halo the step needs.
     fn before_step(&mut self, sys: &mut System<D>, dt: f64) -> Result<(), String>;
+    /// At a step's end: particles crossing port openings ([`System::exchange_port_particles`]
+    /// over the ranks).
+    fn after_step(&mut self, sys: &mut System<D>) -> Result<(), String>;
     /// Totals over the ranks of this rank's diagnostics.
     fn totals(&self, local: Diagnostics) -> Result<Diagnostics, String>;
     /// Element-wise sums over the ranks.
@@ -261,7 +264,16 @@ impl<const D: usize> Simulation<D> {
         self.sys.place_bodies(self.time);
         self.sys.time = self.time;
         // particles cross the port openings: fluid in, fluid out, buffers refilled
-        self.sys.exchange_port_particles();
+        match &mut self.layout {
+            Some(layout) => {
+                if let Err(message) = layout.after_step(&mut self.sys) {
+                    return Err(self.ranks_failed(message));
+                }
+            }
+            None => {
+                self.sys.exchange_port_particles();
+            }
+        }
         self.steps += 1;
         if dt < dt_cap || self.last_dt == 0.0 {
             self.last_dt = dt;

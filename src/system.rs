@@ -117,6 +117,16 @@ pub struct System<const D: usize> {
     /// evaluated with the rest, but neither stepped for the time step, counted in the totals
     /// nor checked; 0 in a single-process run.
     pub halo: usize,
+    /// The other ranks of a distributed run, for the sums outside the scheme's passes that
+    /// span them (body loads, probes and port samples); `None` in a single process.
+    pub ranks: Option<std::sync::Arc<dyn RankSums>>,
+}
+
+/// Element-wise sums over the ranks of a distributed run (`parallel`), in rank order. Every
+/// rank calls it at the same point (a collective). A failed exchange leaves `x` as this
+/// rank's own sums and is reported at the step's agreement, so no caller needs an error path.
+pub trait RankSums: Send + Sync + std::fmt::Debug {
+    fn sum_in_place(&self, x: &mut [f64]);
 }
 
 /// A neighbour list with a skin, the positions and radii it was built for.

@@ -211,6 +211,8 @@ impl<const D: usize> System<D> {
             b.force = Vector::zeros();
             b.torque = [0.0; 3];
         }
+        // a distributed run's halo copies are their owners' to count
+        let own = self.owned();
         let p = &mut self.particles;
         for i in 0..p.len() {
             let b = p.body[i] as usize;
@@ -218,19 +220,36 @@ impl<const D: usize> System<D> {
                 continue;
             }
             let body = &mut self.bodies[b - 1];
-            let g = super::frame::body_force_in(self.frame.as_ref(), &g, &p.pos[i], &p.vel[i]);
-            let f = (p.acc[i] - g) * p.mass[i];
-            p.wall_force[i] = f;
-            body.force += f;
-            let arm = p.pos[i] - (body.reference + body.pose.displacement);
-            let t = to3(&arm).cross(&to3(&f));
-            for k in 0..3 {
-                body.torque[k] += t[k];
+            if i < own {
+                let g =
+                    super::frame::body_force_in(self.frame.as_ref(), &g, &p.pos[i], &p.vel[i]);
+                let f = (p.acc[i] - g) * p.mass[i];
+                p.wall_force[i] = f;
+                body.force += f;
+                let arm = p.pos[i] - (body.reference + body.pose.displacement);
+                let t = to3(&arm).cross(&to3(&f));
+                for k in 0..3 {
+                    body.torque[k] += t[k];
+                }
             }
             let (_, _, a) = body.point(&p.rest[i]);
             p.acc[i] = a;
             p.dudt[i] = 0.0;
             p.drhodt[i] = 0.0;
+        }
+        if let Some(ranks) = &self.ranks {
+            // the loads feed no particle (bodies move by their kinematics), so summing the
+            // ranks' partial loads in rank order keeps the particles rank-independent
+            let mut loads: Vec<f64> = self
+                .bodies
+                .iter()
+                .flat_map(|b| b.force.iter().chain(b.torque.iter()).copied().collect::<Vec<_>>())
+                .collect();
+            ranks.sum_in_place(&mut loads);
+            for (b, l) in self.bodies.iter_mut().zip(loads.chunks_exact(D + 3)) {
+                b.force = Vector::from_column_slice(&l[..D]);
+                b.torque.copy_from_slice(&l[D..]);
+            }
         }
     }
 }

@@ -298,13 +298,17 @@ impl<const D: usize> System<D> {
             let reach = self.kernel.radius(self.h_max);
             // fluid particles that can reach a mirror point (the buffer's mirror lies within
             // one buffer depth in front of the plane)
-            let near: Vec<usize> = (0..p.len())
+            let mut near: Vec<usize> = (0..p.len())
                 .filter(|&f| p.body[f] == 0 && p.port[f] == 0)
                 .filter(|&f| {
                     let (d, t) = port.split(&p.pos[f]);
                     d > -reach && d < port.depth + reach && t.norm() <= port.opening.reach() + reach
                 })
                 .collect();
+            if self.canonical_order {
+                // the sums below in the order of the ids, as the neighbour rows (`parallel`)
+                near.sort_unstable_by_key(|&f| p.id[f]);
+            }
             let p_port = port.pressure_at(t);
             let shepard = |x: &Vector<D>, h: f64| {
                 let mut s = FluidSums {
@@ -397,7 +401,26 @@ impl<const D: usize> System<D> {
         if self.ports.is_empty() {
             return false;
         }
-        let n = self.particles.len();
+        let crossings = self.cross_ports(self.particles.len());
+        for (port, [mass_in, mass_out]) in self.ports.iter_mut().zip(&crossings.flow) {
+            port.mass_in += mass_in;
+            port.mass_out += mass_out;
+        }
+        if !crossings.changed {
+            return false;
+        }
+        // fresh ids after the largest in use (ids stay unique and stable)
+        let next_id = self.particles.id.iter().copied().max().map_or(0, |m| m + 1);
+        let ids: Vec<u32> = (0..crossings.copies.len() as u32).map(|j| next_id + j).collect();
+        self.apply_port_crossings(crossings, &ids);
+        true
+    }
+
+    /// The first part of [`Self::exchange_port_particles`] on particles `0..n` (a distributed
+    /// run's own): buffer velocities restored and fluid and buffer tags updated; the mass
+    /// that crossed each port (for its counters), which particles stay and which are copied
+    /// are returned, for [`Self::apply_port_crossings`].
+    pub fn cross_ports(&mut self, n: usize) -> PortCrossings {
         {
             let p = &mut self.particles;
             for i in 0..n {
@@ -407,9 +430,9 @@ impl<const D: usize> System<D> {
             }
         }
         let mut keep: Vec<u32> = Vec::with_capacity(n + 16);
-        // (source index, port) of each copy to append
         let mut copies: Vec<(u32, usize)> = Vec::new();
         let mut deleted = false;
+        let mut flow = vec![[0.0; 2]; self.ports.len()];
         for i in 0..n {
             let p = &mut self.particles;
             if p.body[i] != 0 {
@@ -418,11 +441,11 @@ impl<const D: usize> System<D> {
             }
             if p.port[i] != 0 {
                 let k = p.port[i] as usize - 1;
-                let port = &mut self.ports[k];
+                let port = &self.ports[k];
                 let (d, _) = port.split(&p.pos[i]);
                 if d > 0.0 {
                     p.port[i] = 0;
-                    port.mass_in += p.mass[i];
+                    flow[k][0] += p.mass[i];
                     copies.push((i as u32, k));
                 } else if d < -port.depth {
                     deleted = true;
@@ -431,24 +454,33 @@ impl<const D: usize> System<D> {
                 keep.push(i as u32);
                 continue;
             }
-            for (k, port) in self.ports.iter_mut().enumerate() {
+            for (k, port) in self.ports.iter().enumerate() {
                 let (d, t) = port.split(&p.pos[i]);
                 if d <= 0.0 && d >= -port.depth && port.opening.contains(&t) {
                     p.port[i] = k as u16 + 1;
-                    port.mass_out += p.mass[i];
+                    flow[k][1] += p.mass[i];
                     break;
                 }
             }
             keep.push(i as u32);
         }
-        if copies.is_empty() && !deleted {
-            return false;
+        let changed = deleted || !copies.is_empty();
+        PortCrossings {
+            keep,
+            copies,
+            changed,
+            flow,
         }
+    }
+
+    /// Keep what `crossings` keeps (every other particle, a distributed run's halo included,
+    /// is dropped) and append its copies with the given `ids`, one buffer depth behind their
+    /// source.
+    pub fn apply_port_crossings(&mut self, crossings: PortCrossings, ids: &[u32]) {
+        let PortCrossings { mut keep, copies, .. } = crossings;
         let first_copy = keep.len();
         keep.extend(copies.iter().map(|&(i, _)| i));
         let p = &mut self.particles;
-        // fresh ids after the largest in use (ids stay unique and stable)
-        let next_id = p.id.iter().copied().max().map_or(0, |m| m + 1);
         p.permute(&keep);
         for (j, &(_, k)) in copies.iter().enumerate() {
             let c = first_copy + j;
@@ -456,9 +488,21 @@ impl<const D: usize> System<D> {
             p.pos[c] -= port.normal * port.depth;
             p.rest[c] = p.pos[c];
             p.port[c] = k as u16 + 1;
-            p.id[c] = next_id + j as u32;
+            p.id[c] = ids[j];
         }
+        self.halo = 0;
         self.reset_neighbours();
-        true
     }
+}
+
+/// What particles crossing the port openings do at a step's end ([`System::cross_ports`]).
+pub struct PortCrossings {
+    /// The particles that stay, in order.
+    keep: Vec<u32>,
+    /// (index of the source, port) of each copy that refills a buffer.
+    pub copies: Vec<(u32, usize)>,
+    /// Particles were created or deleted.
+    pub changed: bool,
+    /// Mass that entered and left the fluid through each port.
+    pub flow: Vec<[f64; 2]>,
 }

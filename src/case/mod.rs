@@ -473,6 +473,7 @@ impl Case {
             relativistic: None,
             canonical_order: false,
             halo: 0,
+            ranks: None,
             frame: self.frame.as_ref().map(|f| f.build::<D>()),
             ports,
             drives: self.drives::<D>()?,

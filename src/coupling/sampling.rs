@@ -43,10 +43,31 @@ impl<const D: usize> Sums<D> {
     }
 }
 
+/// [`Sums`] over this process's fluid particles (a distributed run's halo copies are their
+/// owners' to count), summed over the ranks.
 fn sums<const D: usize>(sys: &System<D>, x: &Vector<D>) -> Sums<D> {
+    let mine = own_sums(sys, x);
+    let Some(ranks) = &sys.ranks else {
+        return mine;
+    };
+    let mut flat = vec![mine.vw, mine.rho, mine.p, mine.w, mine.wp];
+    flat.extend(mine.v.iter().chain(mine.wr.iter()));
+    ranks.sum_in_place(&mut flat);
+    Sums {
+        vw: flat[0],
+        rho: flat[1],
+        p: flat[2],
+        w: flat[3],
+        wp: flat[4],
+        v: Vector::from_column_slice(&flat[5..5 + D]),
+        wr: Vector::from_column_slice(&flat[5 + D..]),
+    }
+}
+
+fn own_sums<const D: usize>(sys: &System<D>, x: &Vector<D>) -> Sums<D> {
     let p = &sys.particles;
     let k = &sys.kernel;
-    (0..p.len())
+    (0..sys.owned())
         .into_par_iter()
         .with_min_len(1024)
         .filter(|&f| p.body[f] == 0)

@@ -54,6 +54,26 @@ pub struct Link {
     pub failure: Mutex<Option<String>>,
 }
 
+impl std::fmt::Debug for Link {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Link(rank {} of {})", self.comm.rank(), self.comm.size())
+    }
+}
+
+impl crate::system::RankSums for Link {
+    fn sum_in_place(&self, x: &mut [f64]) {
+        match crate::parallel::comm::Reduce::sum(&*self.comm, x) {
+            Ok(total) => x.copy_from_slice(&total),
+            Err(e) => {
+                self.failure
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .get_or_insert(e.to_string());
+            }
+        }
+    }
+}
+
 impl Link {
     pub fn new(comm: Arc<dyn Comm>) -> Self {
         Self {

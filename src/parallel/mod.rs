@@ -57,6 +57,22 @@ pub struct Decomposition<const D: usize> {
     built_at: Vec<Vector<D>>,
     /// The halo allows for at least this h (the first evaluation's, estimated at the start).
     h_floor: f64,
+    /// Particles were created or deleted since the halo was built: rebuild it.
+    stale: bool,
+}
+
+/// How many kernel supports deep the halo of `sys` run by `scheme` must be: the scheme's
+/// own chain of passes ([`Scheme::halo_depth`]), and what the boundary conditions add to it.
+/// A wall particle's state comes from the fluid within one support of it (Adami et al.'s
+/// eq. 27, `boundary::bodies`); a port buffer particle's from the fluid within one support
+/// of its mirror point, up to two supports (two buffer depths) in front of it
+/// (`boundary::ports`). (Measured: on the cases of `tests/parallel.rs` the scheme's depth
+/// alone already gives the same particles; the additions keep the halo as deep as the
+/// dependencies reach rather than as deep as those cases happened to need.)
+pub fn halo_depth<const D: usize>(sys: &System<D>, scheme: &dyn Scheme<D>) -> usize {
+    let walls = usize::from(!sys.bodies.is_empty());
+    let ports = if sys.ports.is_empty() { 0 } else { 3 };
+    scheme.halo_depth() + walls.max(ports)
 }
 
 /// Start a distributed run. Every rank passes the same whole system (as built from the
@@ -69,7 +85,7 @@ pub fn start<const D: usize>(
     control: StepControl,
     comm: Arc<dyn Comm>,
 ) -> Result<Simulation<D>, SolverError> {
-    let depth = scheme.halo_depth();
+    let depth = halo_depth(&sys, &*scheme);
     start_with_halo(sys, scheme, kind, control, comm, depth)
 }
 
@@ -83,27 +99,6 @@ pub fn start_with_halo<const D: usize>(
     comm: Arc<dyn Comm>,
     depth: usize,
 ) -> Result<Simulation<D>, SolverError> {
-    let refuse = |what: &str| {
-        SolverError::Scheme {
-        message: format!(
-            "distributed run: {what} are not supported on several ranks yet; run the case in one process"
-        ),
-        time: 0.0,
-        step: 0,
-    }
-    };
-    if !sys.bodies.is_empty() {
-        return Err(refuse("bodies ([[body]], walls)"));
-    }
-    if !sys.ports.is_empty() {
-        return Err(refuse("ports ([[port]])"));
-    }
-    if !sys.drives.is_empty() {
-        return Err(refuse("driven regions ([[drive]])"));
-    }
-    if sys.frame.is_some() {
-        return Err(refuse("moving frames ([frame])"));
-    }
     sys.canonical_order = true;
     sys.halo = 0;
     // The first evaluation solves h from the case's guess, which at free surfaces and
@@ -115,6 +110,7 @@ pub fn start_with_halo<const D: usize>(
     sys.particles.h = guess;
     sys.reset_neighbours();
     let link = Arc::new(Link::new(comm.clone()));
+    sys.ranks = Some(link.clone());
     let points: Vec<(Vector<D>, f64)> = sys.particles.pos.iter().map(|x| (*x, 1.0)).collect();
     let regions = Regions::bisect(&points, comm.size(), &sys.domain);
     let mine: Vec<u32> = (0..sys.particles.len() as u32)
@@ -130,6 +126,7 @@ pub fn start_with_halo<const D: usize>(
         h_floor: h_first,
         skin: 0.0,
         built_at: vec![],
+        stale: true,
     };
     let fail = |message: String| SolverError::Scheme {
         message: format!("distributed run: {message}"),
@@ -194,6 +191,7 @@ impl<const D: usize> Decomposition<D> {
         sys.halo = sys.particles.len() - own;
         sys.reset_neighbours();
         self.built_at = sys.particles.pos[..own].to_vec();
+        self.stale = false;
         *self.link.plan.lock().unwrap_or_else(|e| e.into_inner()) = halo::HaloPlan { send, recv };
         self.link
             .stats
@@ -309,7 +307,7 @@ impl<const D: usize> Layout<D> for Decomposition<D> {
         let own = sys.owned();
         let p = &sys.particles;
         let (mut h, mut speed, mut accel, mut moved) = (0.0_f64, 0.0_f64, 0.0_f64, 0.0_f64);
-        let built = self.built_at.len() == own;
+        let built = !self.stale && self.built_at.len() == own;
         for i in 0..own {
             h = h.max(p.h[i]);
             speed = speed.max(p.vel[i].norm());
@@ -351,6 +349,54 @@ impl<const D: usize> Layout<D> for Decomposition<D> {
         }
         self.migrate(sys)?;
         self.build_halo(sys, dt)
+    }
+
+    fn after_step(&mut self, sys: &mut System<D>) -> Result<(), String> {
+        if sys.ports.is_empty() {
+            return Ok(());
+        }
+        let own = sys.owned();
+        let crossings = sys.cross_ports(own);
+        let comm = self.comm();
+        let mut flow: Vec<f64> = crossings.flow.iter().flatten().copied().collect();
+        flow = comm.sum(&flow).map_err(|e| e.to_string())?;
+        for (port, f) in sys.ports.iter_mut().zip(flow.chunks_exact(2)) {
+            port.mass_in += f[0];
+            port.mass_out += f[1];
+        }
+        // every rank's next free id, whether it created or deleted particles, and the ids of
+        // its copies' sources: a copy's id is the next free one after the largest in use,
+        // counted in the order of the sources' ids, as on one rank
+        let ids = &sys.particles.id;
+        let mut mine = vec![
+            ids[..own].iter().max().map_or(0.0, |&m| m as f64 + 1.0),
+            f64::from(u8::from(crossings.changed)),
+        ];
+        mine.extend(crossings.copies.iter().map(|&(i, _)| ids[i as usize] as f64));
+        let rows: Vec<Vec<f64>> = comm
+            .all_gather(comm::f64_bytes(&mine))
+            .map_err(|e| e.to_string())?
+            .iter()
+            .map(|b| comm::bytes_f64(b))
+            .collect();
+        if !rows.iter().any(|r| r[1] > 0.0) {
+            return Ok(());
+        }
+        let next_id = rows.iter().map(|r| r[0]).fold(0.0, f64::max) as u32;
+        let mut sources: Vec<u32> = rows.iter().flat_map(|r| r[2..].iter().map(|&x| x as u32)).collect();
+        sources.sort_unstable();
+        let new_ids: Vec<u32> = crossings
+            .copies
+            .iter()
+            .map(|&(i, _)| {
+                let rank = sources.partition_point(|&s| s < ids[i as usize]);
+                next_id + rank as u32
+            })
+            .collect();
+        // the halo's copies and plan no longer match their owners': drop it, build anew
+        sys.apply_port_crossings(crossings, &new_ids);
+        self.stale = true;
+        Ok(())
     }
 
     fn sum(&self, x: &[f64]) -> Result<Vec<f64>, String> {

@@ -50,6 +50,7 @@ pub(super) fn gather_to_root<const D: usize>(
         sim.sys.halo = 0;
         sim.sys.reset_neighbours();
         sim.layout = None;
+        sim.sys.ranks = None;
     }
     Ok(())
 }

@@ -1,8 +1,8 @@
 """`mpirun -n R sphfmu run CASE` as a user starts it (issue 23): the same case on 1, 2 and 3
 ranks (oversubscribed on a 2-core machine) writes the same particles, to the last printed
 digit, for standard SPH, CRKSPH and Rosswog F1; the VTU snapshot is one .pvtu with a piece
-per rank, which ParaView and meshio read; a case the decomposition does not handle yet is
-refused with a reason."""
+per rank, which ParaView and meshio read; a body's walls and ports give the same particles
+on 1 and 2 ranks, and the same loads and flows to round-off."""
 import os
 import re
 import shutil
@@ -60,7 +60,36 @@ def test_pvtu_joins_one_piece_per_rank(sphfmu_bin, models, tmp_path):
     assert 'snapshot_00001.pvtu' in (tmp_path / "snapshots.pvd").read_text()
 
 
-def test_case_with_walls_is_refused_on_several_ranks(sphfmu_bin, models, tmp_path):
-    r = mpirun(2, [sphfmu_bin, "run", str(models / "closed-tank2d.toml"), "--out", str(tmp_path), "--quiet"])
-    assert r.returncode != 0
-    assert "not supported on several ranks yet" in r.stderr, r.stderr[-2000:]
+def _columns(path):
+    """A CSV with a header row as a float array (one row per line)."""
+    return np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+
+
+@pytest.mark.parametrize("model,sets,loads", [
+    # walls of a body: the hydrostatic closed tank, and its load history
+    ("closed-tank2d.toml", ["time.t_end=0.05"], "bodies.csv"),
+    # a body with two ports, driven hard enough that particles enter and leave within the run
+    ("channel-ports2d.toml", ["time.t_end=0.5", "region.0.spacing=0.1",
+                              'port.0.pressure={ type = "constant", value = 3.0 }'], "ports.csv"),
+])
+def test_walls_and_ports_are_the_same_on_1_and_2_ranks(sphfmu_bin, models, tmp_path, model, sets, loads):
+    outs = {}
+    for n in (1, 2):
+        out = tmp_path / f"r{n}"
+        args = [sphfmu_bin, "run", str(models / model), "--out", str(out), "--quiet",
+                "--set", "output.snapshot_every=0.0", "--set", 'output.formats=["csv"]']
+        for s in sets:
+            args += ["--set", s]
+        r = mpirun(n, args)
+        assert r.returncode == 0, f"{n} ranks: {r.stdout[-1500:]}\n{r.stderr[-2000:]}"
+        outs[n] = out
+    last = sorted(p.name for p in outs[1].glob("snapshot_*.csv"))[-1]
+    same = (outs[1] / last).read_bytes() == (outs[2] / last).read_bytes()
+    assert same, f"{model}: the particles of {last} differ on 2 ranks"
+    # loads and flows are sums of per-rank sums: equal to round-off
+    a, b = _columns(outs[1] / loads), _columns(outs[2] / loads)
+    assert a.shape == b.shape and np.abs(a).max() > 0
+    assert np.allclose(a, b, rtol=1e-12, atol=1e-12 * np.abs(a).max()), f"{loads}: {np.abs(a - b).max()}"
+    if loads == "ports.csv":
+        # columns per port: mean pressure, volume flow, mass in, mass out
+        assert a[-1, 3] > 0 and a[-1, 8] > 0, "no particle crossed a port"
