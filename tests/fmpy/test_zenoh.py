@@ -145,3 +145,19 @@ def test_two_live_instances_in_one_process_keep_apart():
     # a third instance asking for a's port: its initialisation fails, the log says why
     assert r["third"].startswith("error")
     assert any("zenoh.listen" in m for m in r["log"]), r["log"]
+
+
+def test_the_fmu_as_a_proxy_of_a_node_equals_the_local_fmu():
+    r = session("proxy_matches_local", fmu_path=str(SLOSH3))
+    print(r)
+    # the node runs the same instance code: the same numbers as the FMU solving itself
+    assert r["identical"], r["max_difference"]
+    # getFMUState / setFMUState carry the node's state: the replay is bit for bit
+    assert r["restored_t"] == pytest.approx(0.6) and r["replay_same"]
+    # a bad input is the node's error, logged by the proxy; the step did not happen
+    assert "gravity[3]: must be 0 in a 2D case" in r["bad_input"], r["bad_input"]
+    assert r["after_bad_t"] == pytest.approx(1.2)
+    # the node killed: an error with a log line naming the node, and this process lives on
+    assert "did not answer" in r["after_kill"], r["after_kill"]
+    # the state saved before, restored into a node started anew, resumes the run exactly
+    assert r["resumed_same"]

@@ -409,6 +409,94 @@ def session_two_live_instances(fmu_path, port, prefix):
     }
 
 
+def start_node(port, prefix, case="slosh2d.toml"):
+    """`sphfmu serve` on a loopback listener; returns once it says it is ready."""
+    node = subprocess.Popen([str(ROOT / "target" / "release" / "sphfmu"), "serve",
+                             "--case", str(ROOT / "models" / case), "--prefix", prefix,
+                             "--listen", f"tcp/127.0.0.1:{port}", "--set", "threads=2"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    line = node.stdout.readline()
+    assert "ready" in line, (line, node.stderr.read())
+    return node
+
+
+def proxy_fmu(fmu_path, port, prefix):
+    """The packaged FMU with `remote` set: a proxy of the node at `prefix`."""
+    fmu, vr = open_fmu(fmu_path, init=False)
+    fmu.setDebugLogging(True, ["logEvents", "logStatusWarning", "logStatusError"])
+    fmu.enterInitializationMode(startTime=0.0)
+    fmu.setString([vr["remote"]], [prefix])
+    fmu.setString([vr["zenoh.connect"]], [f"tcp/127.0.0.1:{port}"])
+    fmu.exitInitializationMode()
+    return fmu, vr
+
+
+def proxy_rows(fmu, vr, t, k0, k1, h=0.02):
+    """Steps k0..k1-1 of the sloshing run (as fmu_run) on `fmu` from time t."""
+    rows = []
+    for k in range(k0, k1):
+        fmu.setFloat64([vr["gravity"]], [excitation(t), -G, 0.0])
+        fmu.doStep(t, h)
+        t += h
+        f = list(fmu.getFloat64([vr["tank.force"]], nValues=3))
+        rows.append(f + list(fmu.getFloat64([vr["patch.left.mean_pressure"], vr["probe.left.pressure"]])))
+    return rows, t
+
+
+def session_proxy_matches_local(fmu_path, port, prefix, n=60):
+    """The FMU as a proxy of a node (issue 23): the same outputs as the local FMU, a rollback
+    replayed bit for bit, a node killed mid-run an fmi3Error with a log line (this process
+    survives), and a saved state resumed on a node started anew."""
+    from fmpy.fmi1 import FMICallException
+    local = np.array(fmu_run(fmu_path, n=n))
+    node = start_node(port, prefix)
+    out = {}
+    try:
+        fmu, vr = proxy_fmu(fmu_path, port, prefix)
+        rows, t = proxy_rows(fmu, vr, 0.0, 0, n // 2)
+        state = fmu.getFMUState()
+        blob = fmu.serializeFMUState(state)
+        saved_t = t
+        more, t = proxy_rows(fmu, vr, t, n // 2, n)
+        rows += more
+        out["max_difference"] = float(np.abs(np.array(rows) - local).max())
+        out["identical"] = bool(np.array_equal(np.array(rows), local))
+        # rollback: back to the middle, the second half again
+        fmu.setFMUState(state)
+        out["restored_t"] = float(fmu.getFloat64([vr["time"]])[0])
+        replay, _ = proxy_rows(fmu, vr, saved_t, n // 2, n)
+        out["replay_same"] = bool(np.array_equal(np.array(replay), local[n // 2:]))
+        # a bad input is refused by the node, and nothing changes
+        fmu.setFloat64([vr["gravity"]], [0.0, -G, 1.0])
+        try:
+            fmu.doStep(t, 0.02)
+            out["bad_input"] = "accepted"
+        except FMICallException:
+            out["bad_input"] = LOG[-1][2]
+        out["after_bad_t"] = float(fmu.getFloat64([vr["time"]])[0])
+        fmu.setFloat64([vr["gravity"]], [0.0, -G, 0.0])
+        # the node dies mid-run
+        node.kill()
+        node.wait(timeout=20)
+        try:
+            fmu.doStep(t, 0.02)
+            out["after_kill"] = "accepted"
+        except FMICallException:
+            out["after_kill"] = LOG[-1][2]
+        # a node started anew, the saved state restored into it: the run resumes
+        node = start_node(port, prefix)
+        s = fmu.deserializeFMUState(blob)
+        fmu.setFMUState(s)
+        resumed, _ = proxy_rows(fmu, vr, saved_t, n // 2, n)
+        out["resumed_same"] = bool(np.array_equal(np.array(resumed), local[n // 2:]))
+        fmu.terminate()
+        fmu.freeInstance()
+    finally:
+        if node.poll() is None:
+            node.kill()
+    return out
+
+
 if __name__ == "__main__":
     name, args = sys.argv[1], json.loads(sys.argv[2])
     print(json.dumps(globals()[f"session_{name}"](**args)))

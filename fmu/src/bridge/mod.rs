@@ -12,6 +12,8 @@ pub mod codec;
 #[cfg(feature = "zenoh")]
 pub mod node;
 #[cfg(feature = "zenoh")]
+pub mod proxy;
+#[cfg(feature = "zenoh")]
 mod session;
 #[cfg(feature = "zenoh")]
 pub use session::*;

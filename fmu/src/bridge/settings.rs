@@ -26,6 +26,7 @@ pub enum ZenohParam {
     Prefix,
     Staleness,
     OnStale,
+    Remote,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -43,6 +44,9 @@ pub struct ZenohSettings {
     /// Seconds (wall clock) after which a live input counts as stale; 0 = never.
     pub staleness: f64,
     pub on_stale: OnStale,
+    /// Key prefix of a running `sphfmu serve` node that this instance forwards its steps,
+    /// values and states to (`bridge::proxy`); empty = solve in this process.
+    pub remote: String,
 }
 
 impl Default for ZenohSettings {
@@ -55,6 +59,7 @@ impl Default for ZenohSettings {
             prefix: String::new(),
             staleness: 1.0,
             on_stale: OnStale::Hold,
+            remote: String::new(),
         }
     }
 }
@@ -77,10 +82,12 @@ pub fn parameter_rows() -> Vec<(&'static str, Kind, &'static str, &'static str, 
          "Wall-clock seconds after which a live input counts as stale, ≥ 0; 0 = never", Staleness),
         ("zenoh.on_stale", Kind::String, "hold",
          "A stale live input: hold (keep the last value), master (use the master's value again) or error (doStep fails)", OnStale),
+        ("remote", Kind::String, "",
+         "Key prefix of a running `sphfmu serve` node (reached through zenoh.connect, zenoh.listen or zenoh.config): doStep, values and FMU states are forwarded to it and the solver runs there; empty = solve in this process", Remote),
     ]
 }
 
-fn valid_key_prefix(p: &str) -> Result<(), String> {
+fn valid_key_prefix(name: &str, p: &str) -> Result<(), String> {
     let ok = !p.is_empty()
         && !p.starts_with('/')
         && !p.ends_with('/')
@@ -91,7 +98,7 @@ fn valid_key_prefix(p: &str) -> Result<(), String> {
         Ok(())
     } else {
         Err(format!(
-            "zenoh.prefix: must be a zenoh key without wildcards: '/'-separated non-empty chunks, none of * $ # ? or spaces, not starting with @ or /, got {p:?}"
+            "{name}: must be a zenoh key without wildcards: '/'-separated non-empty chunks, none of * $ # ? or spaces, not starting with @ or /, got {p:?}"
         ))
     }
 }
@@ -156,7 +163,7 @@ impl ZenohSettings {
             ZenohParam::Config => self.config = v.into(),
             ZenohParam::Prefix => {
                 if !v.is_empty() {
-                    valid_key_prefix(v)?;
+                    valid_key_prefix("zenoh.prefix", v)?;
                 }
                 self.prefix = v.into();
             }
@@ -172,6 +179,12 @@ impl ZenohSettings {
                     }
                 }
             }
+            ZenohParam::Remote => {
+                if !v.is_empty() {
+                    valid_key_prefix("remote", v)?;
+                }
+                self.remote = v.into();
+            }
             ZenohParam::Staleness => return Err("zenoh.staleness: is a Float64".into()),
         }
         Ok(())
@@ -185,6 +198,7 @@ impl ZenohSettings {
             ZenohParam::Config => self.config.clone(),
             ZenohParam::Prefix => self.prefix.clone(),
             ZenohParam::Staleness => self.staleness.to_string(),
+            ZenohParam::Remote => self.remote.clone(),
             ZenohParam::OnStale => match self.on_stale {
                 OnStale::Hold => "hold",
                 OnStale::Master => "master",

@@ -3,6 +3,7 @@
 
 pub mod inputs;
 pub mod limits;
+mod remote;
 pub(crate) mod solver;
 mod values;
 
@@ -94,6 +95,9 @@ pub struct Instance {
     /// The zenoh bridge while live coupling is on (`zenoh.mode`).
     #[cfg(feature = "zenoh")]
     pub(crate) bridge: Option<crate::bridge::Bridge>,
+    /// The node this instance forwards to (`remote`), once reached.
+    #[cfg(feature = "zenoh")]
+    pub(crate) remote: Option<crate::bridge::proxy::RemoteNode>,
     output: Output,
     pub mode: Mode,
     start_time: f64,
@@ -149,6 +153,8 @@ impl Instance {
             coupling: Default::default(),
             #[cfg(feature = "zenoh")]
             bridge: None,
+            #[cfg(feature = "zenoh")]
+            remote: None,
             output: Output::default(),
             mode: Mode::Instantiated,
             start_time: 0.0,
@@ -225,6 +231,11 @@ impl Instance {
 
     pub fn exit_initialization(&mut self) -> CallResult<()> {
         self.expect_mode("exitInitializationMode", &[Mode::Initialization])?;
+        if self.proxied() {
+            self.ensure_remote()?;
+            self.mode = Mode::Step;
+            return Ok(());
+        }
         self.ensure_coupling()?;
         self.apply_inputs()?;
         self.open_live()?;
@@ -333,7 +344,7 @@ impl Instance {
     }
 
     pub fn time(&self) -> f64 {
-        self.start_time + self.coupling.get().map(|c| c.time()).unwrap_or(0.0)
+        self.start_time + self.solver_time()
     }
 
     /// One communication step. Its arguments are checked first: a bad one is an Error that
@@ -354,12 +365,16 @@ impl Instance {
             ));
         }
         let target = current + h - self.start_time;
-        let solver_time = self.coupling.get().map_or(0.0, |c| c.time());
+        let solver_time = self.solver_time();
         if target.is_nan() || target <= solver_time {
             return err(format!(
                 "communicationStepSize {h}: the step from {current} ends at {}, not after the FMU's time {now} (the step is below the resolution of the time, or the communication point lies behind it within the 1e-9 tolerance)",
                 current + h
             ));
+        }
+        #[cfg(feature = "zenoh")]
+        if self.remote.is_some() {
+            return self.do_step_remote(h);
         }
         self.apply_inputs_live()?;
         let limits = self.params.limits;
@@ -404,8 +419,9 @@ impl Instance {
                     return Err((
                         Status::Discard,
                         format!(
-                            "the step to t = {} stopped at t = {reached} after {} internal steps: {limit}; lastSuccessfulTime = {reached}. Go on from there, or restore an earlier FMU state",
+                            "the step to t = {} {} {reached} after {} internal steps: {limit}; lastSuccessfulTime = {reached}. Go on from there, or restore an earlier FMU state",
                             current + h,
+                            remote::STEP_STOPPED,
                             r.steps
                         ),
                     ));
@@ -425,7 +441,8 @@ impl Instance {
             Err(e) => {
                 self.mode = Mode::Failed;
                 err(format!(
-                    "the solver failed ({e}); restore a saved FMU state or reset"
+                    "{} ({e}); restore a saved FMU state or reset",
+                    remote::SOLVER_FAILED
                 ))
             }
         }
@@ -471,6 +488,10 @@ impl Instance {
     pub fn reset(&mut self) {
         self.coupling.put(None);
         self.close_live();
+        #[cfg(feature = "zenoh")]
+        {
+            self.remote = None;
+        }
         self.params = Params::start(match &self.table.variables[1].start {
             Start::Text(t) => t.clone(),
             _ => unreachable!("variable 1 is the case parameter"),
@@ -485,6 +506,10 @@ impl Instance {
     // ---- FMU state ---------------------------------------------------------------------
 
     pub fn get_state(&self) -> CallResult<Snapshot> {
+        #[cfg(feature = "zenoh")]
+        if self.proxied() {
+            return self.get_state_remote();
+        }
         let Some(c) = self.coupling.get() else {
             return err(
                 "getFMUState: available once initialisation has ended (no solver state yet)",
@@ -502,7 +527,9 @@ impl Instance {
             "setFMUState",
             &[Mode::Step, Mode::Failed, Mode::Initialization],
         )?;
-        self.ensure_coupling()?;
+        if !self.proxied() {
+            self.ensure_coupling()?;
+        }
         if s.inputs.bodies.len() != self.table.external_bodies.len()
             || s.inputs.frame.is_some() != self.table.frame_form.is_some()
             || s.inputs.ports.len() != self.table.external_ports.len()
@@ -510,6 +537,10 @@ impl Instance {
             return err(
                 "setFMUState: the state belongs to another model (body or port inputs differ)",
             );
+        }
+        #[cfg(feature = "zenoh")]
+        if self.proxied() {
+            return self.set_state_remote(s);
         }
         let c = self.coupling.get().expect("built above");
         // the inputs the state carries pass the checks a master's set would

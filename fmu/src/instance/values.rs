@@ -214,6 +214,10 @@ impl Instance {
                 self.table.variables[i].name, self.mode
             ));
         }
+        #[cfg(feature = "zenoh")]
+        if self.proxied() {
+            return self.remote_output(i);
+        }
         self.ensure_coupling()?;
         let mut c = self.coupling.outputs().expect("built above");
         let b = self.table.variables[i].binding;
