@@ -224,9 +224,11 @@ pub fn state_cost(d: usize, n: usize, repeats: usize) -> Result<StateCost, Strin
         t.elapsed().as_secs_f64()
     };
     let (mut save, mut restore, mut crc) = (vec![], vec![], vec![]);
-    let mut bytes = c.save();
+    let mut bytes = c.save().map_err(|e| e.0)?;
     for _ in 0..repeats.max(1) {
-        save.push(time(&mut || bytes = c.save()));
+        let mut saved = Ok(vec![]);
+        save.push(time(&mut || saved = c.save()));
+        bytes = saved.map_err(|e| e.0)?;
         let mut ok = Ok(());
         restore.push(time(&mut || ok = c.restore(&bytes)));
         ok.map_err(|e| e.0)?;

@@ -1,7 +1,7 @@
 //! The driver: a system, a scheme and an integrator, advanced with a global time step.
 
 use crate::integrate::{Integrator, IntegratorKind};
-use crate::particles::Vector;
+use crate::particles::{Particles, Vector};
 use crate::scheme::Scheme;
 use crate::system::System;
 use rayon::prelude::*;
@@ -115,6 +115,15 @@ pub trait Layout<const D: usize>: Send + Sync {
     /// At a step's end: particles crossing port openings ([`System::exchange_port_particles`]
     /// over the ranks).
     fn after_step(&mut self, sys: &mut System<D>) -> Result<(), String>;
+    /// Make the halo fit for an evaluation outside a step (inputs moved walls, or a state
+    /// was restored): hand particles to their owners and build the halo anew; `dt` is the
+    /// motion's time scale (the last step).
+    fn refresh(&mut self, sys: &mut System<D>, dt: f64) -> Result<(), String>;
+    /// Every rank's own particles, ordered by id (a collective; every rank gets them all).
+    fn gather(&self, sys: &System<D>) -> Result<Particles<D>, String>;
+    /// Replace the run's particles by `all` (a whole case's, as [`Self::gather`] gives):
+    /// this rank keeps those in its region, and builds its halo before the next evaluation.
+    fn replace(&mut self, sys: &mut System<D>, all: Particles<D>);
     /// Totals over the ranks of this rank's diagnostics.
     fn totals(&self, local: Diagnostics) -> Result<Diagnostics, String>;
     /// Element-wise sums over the ranks.
@@ -353,6 +362,14 @@ impl<const D: usize> Simulation<D> {
                 time: self.time,
                 step: self.steps,
             })?;
+        if let Some(layout) = &mut self.layout {
+            // the walls may have jumped to a master's pose, or the particles come from a
+            // restored state: the halo is built for them (a collective: every rank's inputs
+            // are the same, so every rank reevaluates)
+            layout
+                .refresh(&mut self.sys, self.last_dt)
+                .map_err(|message| self.ranks_failed(message))?;
+        }
         self.scheme
             .evaluate(&mut self.sys)
             .map_err(|e| SolverError::Scheme {

@@ -5,6 +5,7 @@ use crate::domain::{Domain, ImageCode};
 use crate::eos::{Eos, EosConfig};
 use crate::kernel::DimKernel;
 use crate::neighbours::{unpack, CellGrid, NeighbourList};
+use crate::parallel::exact::ExactSum;
 use crate::particles::{Particles, Vector};
 use rayon::prelude::*;
 
@@ -122,11 +123,15 @@ pub struct System<const D: usize> {
     pub ranks: Option<std::sync::Arc<dyn RankSums>>,
 }
 
-/// Element-wise sums over the ranks of a distributed run (`parallel`), in rank order. Every
-/// rank calls it at the same point (a collective). A failed exchange leaves `x` as this
-/// rank's own sums and is reported at the step's agreement, so no caller needs an error path.
+/// Sums over the ranks of a distributed run (`parallel`): every rank's exact registers
+/// ([`ExactSum`]) merged, so a total is the same bits however the particles are shared among
+/// the ranks. Every rank calls it at the same point (a collective). A failed exchange leaves
+/// `x` as this rank's own sums and is reported at the step's agreement, so no caller needs
+/// an error path.
 pub trait RankSums: Send + Sync + std::fmt::Debug {
-    fn sum_in_place(&self, x: &mut [f64]);
+    fn merge_in_place(&self, x: &mut [ExactSum]);
+    /// Element-wise maxima over the ranks (the same rules).
+    fn max_in_place(&self, x: &mut [f64]);
 }
 
 /// A neighbour list with a skin, the positions and radii it was built for.

@@ -73,7 +73,7 @@ fn save_restore_is_exact(label: &str, case: &Case, drive: impl Fn(&mut Coupling,
     let t2 = 0.12;
     drive(&mut a, 0.0);
     a.step_to(t1).unwrap();
-    let saved = a.save();
+    let saved = a.save().unwrap();
     let at_t1 = fingerprint(&a);
     drive(&mut a, t1);
     a.step_to(t2).unwrap();
@@ -298,7 +298,7 @@ fn bad_inputs_are_clear_errors_and_change_nothing() {
     let mut c = Coupling::new(&case, &options()).unwrap();
     c.step_to(0.02).unwrap();
     let before = fingerprint(&c);
-    let saved = c.save();
+    let saved = c.save().unwrap();
     let piston = c.body_index("piston").unwrap();
     let end = c.body_index("end").unwrap();
     let k = |x: f64| BodyKinematics {
@@ -348,7 +348,7 @@ fn bad_inputs_are_clear_errors_and_change_nothing() {
         },
     )
     .unwrap();
-    let e = c.restore(&finer.save()).unwrap_err().0;
+    let e = c.restore(&finer.save().unwrap()).unwrap_err().0;
     assert!(e.starts_with("state: saved from another case"), "{e}");
     // options out of range
     for (o, want) in [

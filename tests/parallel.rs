@@ -3,6 +3,7 @@
 
 use crate::common::random_box;
 use sphfmu::case::Case;
+use sphfmu::coupling::{Coupling, CouplingOptions};
 use sphfmu::parallel::{self, comm::Comm, comm::Reduce, comm::ThreadRanks};
 use sphfmu::particles::Particles;
 use sphfmu::sim::Diagnostics;
@@ -71,7 +72,12 @@ fn run_with<const D: usize>(
                     .iter()
                     .map(|b| b.force.iter().copied().chain([b.torque[2]]).collect())
                     .collect();
-                let flows = sim.sys.ports.iter().map(|p| [p.mass_in, p.mass_out]).collect();
+                let flows = sim
+                    .sys
+                    .ports
+                    .iter()
+                    .map(|p| [p.mass_in, p.mass_out])
+                    .collect();
                 let particles = parallel::gather_particles(&sim, &*comm).expect("gather");
                 Outcome {
                     particles,
@@ -176,8 +182,8 @@ fn close(a: &[f64], b: &[f64], tol: f64) -> bool {
     a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol * scale)
 }
 
-/// A case on 1, 2 and 3 ranks, `steps` steps: the particles equal to the bit, the bodies'
-/// loads and the ports' flows (sums of per-rank sums) to 1e-12.
+/// A case on 1, 2 and 3 ranks, `steps` steps: the particles and the bodies' loads equal to
+/// the bit, the ports' flows (sums of per-rank sums) to 1e-12.
 /// A halo of the skin alone must change the particles on 2 ranks, or the comparison could
 /// not fail.
 fn boundary_case_same_on_1_2_3_ranks<const D: usize>(text: &str, steps: usize) -> Outcome<D> {
@@ -193,11 +199,13 @@ fn boundary_case_same_on_1_2_3_ranks<const D: usize>(text: &str, steps: usize) -
         if let Some(d) = first_difference(&one.particles, &many.particles) {
             panic!("1 rank against {ranks}: {d}");
         }
-        for (a, b) in one.loads.iter().zip(&many.loads) {
-            assert!(close(a, b, 1e-12), "body loads {a:?} on 1 rank, {b:?} on {ranks}");
-        }
+        // the loads are exact sums (`parallel::exact`): the same bits
+        assert_eq!(one.loads, many.loads, "body loads on 1 rank and on {ranks}");
         for (a, b) in one.flows.iter().zip(&many.flows) {
-            assert!(close(a, b, 1e-12), "port flows {a:?} on 1 rank, {b:?} on {ranks}");
+            assert!(
+                close(a, b, 1e-12),
+                "port flows {a:?} on 1 rank, {b:?} on {ranks}"
+            );
         }
     }
     one
@@ -210,13 +218,22 @@ fn boundary_case_same_on_1_2_3_ranks<const D: usize>(text: &str, steps: usize) -
 fn a_body_with_ports_is_bit_identical_on_1_2_3_ranks() {
     let text = crate::common::model_text("channel-ports2d.toml")
         .replace("spacing = 0.05", "spacing = 0.1")
-        .replace("type = \"external\", initial = 0.06", "type = \"constant\", value = 3.0");
+        .replace(
+            "type = \"external\", initial = 0.06",
+            "type = \"constant\", value = 3.0",
+        );
     let one = boundary_case_same_on_1_2_3_ranks::<2>(&text, 300);
     let [inlet, outlet] = [one.flows[0], one.flows[1]];
-    eprintln!("inlet in/out {inlet:?}, outlet in/out {outlet:?}, particles {}", one.particles.len());
+    eprintln!(
+        "inlet in/out {inlet:?}, outlet in/out {outlet:?}, particles {}",
+        one.particles.len()
+    );
     assert!(inlet[0] > 0.0, "no particle entered through the inlet");
     assert!(outlet[1] > 0.0, "no particle left through the outlet");
-    assert!(one.loads[0].iter().any(|&f| f != 0.0), "the channel felt no load");
+    assert!(
+        one.loads[0].iter().any(|&f| f != 0.0),
+        "the channel felt no load"
+    );
 }
 
 /// A tank sloshing in its own accelerating frame (`[frame]`): walls and the frame's
@@ -235,4 +252,149 @@ fn a_tank_in_a_moving_frame_is_bit_identical_on_1_2_3_ranks() {
 fn a_driven_1d_shell_is_bit_identical_on_1_2_3_ranks() {
     let text = crate::common::model_text("verify/kidder.toml");
     boundary_case_same_on_1_2_3_ranks::<1>(&text, 1500);
+}
+
+/// What a master reads of the closed tank after each step: the tank's force and torque, the
+/// floor patch's mean and peak pressure and force, a probe's pressure and velocity.
+fn tank_outputs(c: &Coupling) -> Vec<f64> {
+    let l = &c.loads()[0];
+    let pa = &c.patches()[0];
+    let pr = &c.probes()[0];
+    let mut row = vec![l.force[0], l.force[1], l.torque[2]];
+    row.extend([pa.mean_pressure, pa.peak_pressure, pa.force[0], pa.force[1]]);
+    row.extend([pr.pressure, pr.velocity[0], pr.velocity[1]]);
+    row
+}
+
+/// How a coupled run on ranks goes: from the case's start or from a saved state, `steps`
+/// communication steps of `H` under a swinging gravity (an input every step, so every step
+/// re-evaluates and rebuilds the halo), the state saved after step `save_at`.
+struct CoupledPlan {
+    ranks: usize,
+    from: Option<(usize, Vec<u8>)>,
+    steps: usize,
+    save_at: usize,
+    /// Restore the saved state at the end and step again to the end: the rows of the replay.
+    replay: bool,
+}
+
+const H: f64 = 0.004;
+
+/// Rank 0's rows (one per step), the state saved after step `save_at`, and the replay's rows.
+fn coupled_run(text: &str, plan: CoupledPlan) -> (Vec<Vec<f64>>, Vec<u8>, Vec<Vec<f64>>) {
+    let case = Case::parse(text).expect("case parses");
+    let options = CouplingOptions {
+        threads: 1,
+        ..Default::default()
+    };
+    let plan = Arc::new(plan);
+    let handles: Vec<_> = ThreadRanks::group(plan.ranks)
+        .into_iter()
+        .map(|comm| {
+            let (case, options, plan) = (case.clone(), options.clone(), plan.clone());
+            std::thread::spawn(move || {
+                let comm: Arc<dyn Comm> = Arc::new(comm);
+                let mut c = Coupling::new_on(&case, &options, Some(comm)).expect("coupling");
+                let k0 = plan.from.as_ref().map_or(0, |(k, bytes)| {
+                    c.restore(bytes)
+                        .expect("a state saved on other ranks restores");
+                    *k
+                });
+                let step = |c: &mut Coupling, k: usize| {
+                    let t = (k + 1) as f64 * H;
+                    c.set_gravity([2.0 * (12.0 * t).sin(), -9.81, 0.0]).unwrap();
+                    c.step_to(t).expect("step");
+                    tank_outputs(c)
+                };
+                let (mut rows, mut saved) = (vec![], vec![]);
+                for k in k0..k0 + plan.steps {
+                    rows.push(step(&mut c, k));
+                    if k == plan.save_at {
+                        saved = c.save().expect("save");
+                    }
+                }
+                let mut replay = vec![];
+                if plan.replay {
+                    c.restore(&saved).expect("restore");
+                    for k in plan.save_at + 1..k0 + plan.steps {
+                        replay.push(step(&mut c, k));
+                    }
+                }
+                (rows, saved, replay)
+            })
+        })
+        .collect();
+    let mut all: Vec<_> = handles
+        .into_iter()
+        .map(|h| h.join().expect("rank"))
+        .collect();
+    let first = all.swap_remove(0);
+    for (rows, saved, _) in &all {
+        assert_eq!(rows, &first.0, "ranks read different outputs");
+        assert!(saved == &first.1, "ranks saved different states");
+    }
+    first
+}
+
+fn bits(rows: &[Vec<f64>]) -> Vec<Vec<u64>> {
+    rows.iter()
+        .map(|r| r.iter().map(|x| x.to_bits()).collect())
+        .collect()
+}
+
+/// The co-simulation interface on ranks (`Coupling::new_on`, what `mpirun -n R sphfmu serve`
+/// runs): a master's inputs every step, and the tank's loads, patch and probe read back are
+/// the same bits on 1, 2 and 3 ranks (exact sums, `parallel::exact`); a state saved on 2
+/// ranks restores on 3 and on 1 and continues with the same bits; a rollback on the same
+/// ranks replays them.
+#[test]
+fn a_coupling_on_ranks_reads_the_same_bits_and_restores_on_any_number_of_ranks() {
+    let text = crate::common::model_text("closed-tank2d.toml")
+        .replace("spacing = 0.02", "spacing = 0.04")
+        + "\n[[probe]]\nname = \"middle\"\npoint = [0.5, 0.2]\n";
+    let (steps, save_at) = (24, 11);
+    let plan = |ranks, replay| CoupledPlan {
+        ranks,
+        from: None,
+        steps,
+        save_at,
+        replay,
+    };
+    let (one, _, _) = coupled_run(&text, plan(1, false));
+    assert!(one.iter().flatten().all(|x| x.is_finite()));
+    // the swinging gravity moves the water: the outputs change from step to step
+    assert!(one[0][0] != one[steps - 1][0] && one[0][7] != one[steps - 1][7]);
+    let (two, saved, replay) = coupled_run(&text, plan(2, true));
+    let (three, _, _) = coupled_run(&text, plan(3, false));
+    assert_eq!(bits(&one), bits(&two), "1 rank against 2");
+    assert_eq!(bits(&one), bits(&three), "1 rank against 3");
+    assert_eq!(
+        bits(&replay),
+        bits(&one[save_at + 1..]),
+        "the rollback on 2 ranks"
+    );
+    for ranks in [3, 1] {
+        let (resumed, _, _) = coupled_run(
+            &text,
+            CoupledPlan {
+                ranks,
+                from: Some((save_at + 1, saved.clone())),
+                steps: steps - save_at - 1,
+                save_at: usize::MAX,
+                replay: false,
+            },
+        );
+        assert_eq!(
+            bits(&resumed),
+            bits(&one[save_at + 1..]),
+            "saved on 2 ranks, resumed on {ranks}"
+        );
+    }
+    // a single process takes the state too (its own summation order from there on)
+    let case = Case::parse(&text).unwrap();
+    let mut alone = Coupling::new(&case, &Default::default()).unwrap();
+    alone
+        .restore(&saved)
+        .expect("a state saved on ranks restores in one process");
+    alone.step_to((save_at + 2) as f64 * H).expect("step");
 }

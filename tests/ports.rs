@@ -205,7 +205,7 @@ fn bad_port_pressures_from_outside_fail_and_change_nothing() {
     let case = external_inlet();
     let mut c = Coupling::new(&case, &CouplingOptions::default()).unwrap();
     c.step_to(0.05).unwrap();
-    let before = c.save();
+    let before = c.save().unwrap();
     for bad in [-1.0, f64::NAN, f64::INFINITY] {
         let e = c.set_port_pressure(0, bad).unwrap_err();
         assert!(
@@ -222,7 +222,10 @@ fn bad_port_pressures_from_outside_fail_and_change_nothing() {
         .unwrap_err()
         .0
         .contains("no port named"));
-    assert!(c.save() == before, "a rejected input changed the state");
+    assert!(
+        c.save().unwrap() == before,
+        "a rejected input changed the state"
+    );
 }
 
 /// What a continued run is judged by, as bit patterns: diagnostics, port values and every
@@ -250,7 +253,7 @@ fn save_and_restore_across_particle_creation_and_deletion_is_bit_exact() {
     let case = Case::parse(&common::model_text("drain2d.toml")).unwrap();
     let mut a = Coupling::new(&case, &CouplingOptions::default()).unwrap();
     a.step_to(0.05).unwrap();
-    let saved = a.save();
+    let saved = a.save().unwrap();
     a.step_to(0.12).unwrap();
     let n = a.diagnostics();
     assert!(a.ports()[0].mass_out > 0.0, "particles left during the run");

@@ -67,7 +67,7 @@ fn orientations_a_body_cannot_take_are_errors_that_change_nothing() {
     let mut c = box3d();
     let b = c.body_index("box").unwrap();
     c.step_to(0.01).unwrap();
-    let saved = c.save();
+    let saved = c.save().unwrap();
     let with = |orientation: [f64; 4], angular_velocity: [f64; 3]| BodyKinematics {
         orientation,
         angular_velocity,
@@ -95,7 +95,11 @@ fn orientations_a_body_cannot_take_are_errors_that_change_nothing() {
         let e = c.set_body_kinematics(b, &k).unwrap_err().0;
         assert!(e.starts_with(want), "{e:?} should start with {want:?}");
     }
-    assert_eq!(c.save(), saved, "a refused input changed the state");
+    assert_eq!(
+        c.save().unwrap(),
+        saved,
+        "a refused input changed the state"
+    );
     // within 1e-6 of unit length: renormalised
     c.set_body_kinematics(b, &with([1.0 + 5e-7, 0.0, 0.0, 0.0], [0.0; 3]))
         .unwrap();
@@ -110,7 +114,7 @@ fn orientations_a_body_cannot_take_are_errors_that_change_nothing() {
     let mut c = Coupling::new(&case, &full).unwrap();
     let piston = c.body_index("piston").unwrap();
     c.step_to(0.01).unwrap();
-    let saved = c.save();
+    let saved = c.save().unwrap();
     let tilted = orientation::to_array(&nalgebra::UnitQuaternion::from_euler_angles(0.1, 0.0, 0.0));
     for k in [
         BodyKinematics {
@@ -127,7 +131,11 @@ fn orientations_a_body_cannot_take_are_errors_that_change_nothing() {
         let e = c.set_body_kinematics(piston, &k).unwrap_err().0;
         assert!(e.contains("turns about z only in a 2D case"), "{e}");
     }
-    assert_eq!(c.save(), saved, "a refused input changed the state");
+    assert_eq!(
+        c.save().unwrap(),
+        saved,
+        "a refused input changed the state"
+    );
     let mut k = BodyKinematics {
         position: [1.0, 0.1, 0.0],
         ..Default::default()
@@ -213,7 +221,7 @@ fn a_frame_driven_from_outside_pushes_the_water_like_a_moved_tank() {
     let k = c.frame_kinematics().unwrap();
     assert_eq!(k.acceleration, [2.0, 0.0, 0.0]);
     // the frame's motion is checked as a body's, and saved with the state
-    let saved = c.save();
+    let saved = c.save().unwrap();
     let tilted = orientation::to_array(&nalgebra::UnitQuaternion::from_euler_angles(0.1, 0.0, 0.0));
     let bad = BodyKinematics {
         orientation: tilted,

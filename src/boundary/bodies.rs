@@ -16,6 +16,7 @@
 
 use super::kinematics::{from3, to3, HeldPose, Motion, Pose};
 use crate::neighbours::unpack;
+use crate::parallel::exact::registers;
 use crate::particles::Vector;
 use crate::system::System;
 use rayon::prelude::*;
@@ -207,11 +208,11 @@ impl<const D: usize> System<D> {
             return;
         }
         let g = self.uniform_body_force();
-        for b in &mut self.bodies {
-            b.force = Vector::zeros();
-            b.torque = [0.0; 3];
-        }
-        // a distributed run's halo copies are their owners' to count
+        // per body: D force components, then 3 torque components, each summed exactly, so a
+        // load is the same bits whichever rank owns which wall particle, in whatever order
+        // (`parallel::exact`); a distributed run's halo copies are their owners' to count
+        let width = D + 3;
+        let mut loads = registers(self.bodies.len() * width);
         let own = self.owned();
         let p = &mut self.particles;
         for i in 0..p.len() {
@@ -219,17 +220,16 @@ impl<const D: usize> System<D> {
             if b == 0 {
                 continue;
             }
-            let body = &mut self.bodies[b - 1];
+            let body = &self.bodies[b - 1];
             if i < own {
-                let g =
-                    super::frame::body_force_in(self.frame.as_ref(), &g, &p.pos[i], &p.vel[i]);
+                let g = super::frame::body_force_in(self.frame.as_ref(), &g, &p.pos[i], &p.vel[i]);
                 let f = (p.acc[i] - g) * p.mass[i];
                 p.wall_force[i] = f;
-                body.force += f;
                 let arm = p.pos[i] - (body.reference + body.pose.displacement);
                 let t = to3(&arm).cross(&to3(&f));
-                for k in 0..3 {
-                    body.torque[k] += t[k];
+                let sums = &mut loads[(b - 1) * width..b * width];
+                for (s, x) in sums.iter_mut().zip(f.iter().chain(t.iter())) {
+                    s.add(*x);
                 }
             }
             let (_, _, a) = body.point(&p.rest[i]);
@@ -238,18 +238,11 @@ impl<const D: usize> System<D> {
             p.drhodt[i] = 0.0;
         }
         if let Some(ranks) = &self.ranks {
-            // the loads feed no particle (bodies move by their kinematics), so summing the
-            // ranks' partial loads in rank order keeps the particles rank-independent
-            let mut loads: Vec<f64> = self
-                .bodies
-                .iter()
-                .flat_map(|b| b.force.iter().chain(b.torque.iter()).copied().collect::<Vec<_>>())
-                .collect();
-            ranks.sum_in_place(&mut loads);
-            for (b, l) in self.bodies.iter_mut().zip(loads.chunks_exact(D + 3)) {
-                b.force = Vector::from_column_slice(&l[..D]);
-                b.torque.copy_from_slice(&l[D..]);
-            }
+            ranks.merge_in_place(&mut loads);
+        }
+        for (b, l) in self.bodies.iter_mut().zip(loads.chunks_exact(width)) {
+            b.force = Vector::from_fn(|k, _| l[k].value());
+            b.torque = [0, 1, 2].map(|k| l[D + k].value());
         }
     }
 }

@@ -411,7 +411,9 @@ impl<const D: usize> System<D> {
         }
         // fresh ids after the largest in use (ids stay unique and stable)
         let next_id = self.particles.id.iter().copied().max().map_or(0, |m| m + 1);
-        let ids: Vec<u32> = (0..crossings.copies.len() as u32).map(|j| next_id + j).collect();
+        let ids: Vec<u32> = (0..crossings.copies.len() as u32)
+            .map(|j| next_id + j)
+            .collect();
         self.apply_port_crossings(crossings, &ids);
         true
     }
@@ -477,7 +479,9 @@ impl<const D: usize> System<D> {
     /// is dropped) and append its copies with the given `ids`, one buffer depth behind their
     /// source.
     pub fn apply_port_crossings(&mut self, crossings: PortCrossings, ids: &[u32]) {
-        let PortCrossings { mut keep, copies, .. } = crossings;
+        let PortCrossings {
+            mut keep, copies, ..
+        } = crossings;
         let first_copy = keep.len();
         keep.extend(copies.iter().map(|&(i, _)| i));
         let p = &mut self.particles;

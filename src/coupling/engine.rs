@@ -8,8 +8,13 @@ use super::{
 use crate::boundary::geometry::Shape;
 use crate::boundary::kinematics::{HeldPose, Pose};
 use crate::case::Case;
+use crate::parallel::comm::Comm;
+use crate::parallel::exact::registers;
+use crate::particles::Particles;
 use crate::particles::Vector;
 use crate::sim::{Diagnostics, Simulation, SolverError};
+use std::borrow::Cow;
+use std::sync::Arc;
 
 pub(super) trait Engine: Send + Sync {
     fn time(&self) -> f64;
@@ -30,7 +35,7 @@ pub(super) trait Engine: Send + Sync {
     fn patches(&self, members: &[PatchMembers]) -> Vec<PatchValue>;
     fn diagnostics(&self) -> Diagnostics;
     fn write_vtu(&self, path: &std::path::Path) -> std::io::Result<()>;
-    fn save(&self, fingerprint: u64) -> Vec<u8>;
+    fn save(&self, fingerprint: u64) -> Result<Vec<u8>, String>;
     fn restore(&mut self, bytes: &[u8], fingerprint: u64) -> Result<(), String>;
 }
 
@@ -63,11 +68,24 @@ fn held_pose<const D: usize>(time: f64, reference: &Vector<D>, k: &BodyKinematic
     }
 }
 
-pub(super) fn build(case: &Case) -> Result<Box<dyn Engine>, CouplingError> {
+/// The solver of `case`, in this process alone or shared among `ranks` (`parallel`).
+pub(super) fn build(
+    case: &Case,
+    ranks: Option<Arc<dyn Comm>>,
+) -> Result<Box<dyn Engine>, CouplingError> {
+    fn sim<const D: usize>(
+        case: &Case,
+        ranks: Option<Arc<dyn Comm>>,
+    ) -> Result<Simulation<D>, CouplingError> {
+        Ok(match ranks {
+            None => case.build::<D>()?,
+            Some(comm) => case.distributed::<D>(comm)?,
+        })
+    }
     Ok(match case.case.dimension {
-        1 => Box::new(Coupled::new(case.build::<1>()?)),
-        2 => Box::new(Coupled::new(case.build::<2>()?)),
-        3 => Box::new(Coupled::new(case.build::<3>()?)),
+        1 => Box::new(Coupled::new(sim::<1>(case, ranks)?)),
+        2 => Box::new(Coupled::new(sim::<2>(case, ranks)?)),
+        3 => Box::new(Coupled::new(sim::<3>(case, ranks)?)),
         d => {
             return Err(CouplingError(format!(
                 "case.dimension: must be 1, 2 or 3, got {d}"
@@ -102,6 +120,20 @@ pub(super) struct Coupled<const D: usize> {
 impl<const D: usize> Coupled<D> {
     fn new(sim: Simulation<D>) -> Self {
         Self { sim, dirty: false }
+    }
+
+    /// The whole case's particles: this process's, or in a distributed run every rank's own,
+    /// gathered in id order (a collective). Should the ranks fail to exchange, this rank's
+    /// own (the failure stops the next step, where every rank meets it).
+    fn whole(&self) -> Cow<'_, Particles<D>> {
+        let sys = &self.sim.sys;
+        match &self.sim.layout {
+            None => Cow::Borrowed(&sys.particles),
+            Some(layout) => Cow::Owned(layout.gather(sys).unwrap_or_else(|_| {
+                sys.particles
+                    .selected(&(0..sys.owned() as u32).collect::<Vec<_>>())
+            })),
+        }
     }
 }
 
@@ -182,7 +214,15 @@ impl<const D: usize> Engine for Coupled<D> {
                 return false;
             }
             let seconds = clock.elapsed().as_secs_f64();
-            if chunk.max_seconds.is_some_and(|m| seconds >= m) {
+            let mut out_of_time = chunk.max_seconds.is_some_and(|m| seconds >= m);
+            if let (Some(layout), Some(_)) = (&s.layout, chunk.max_seconds) {
+                // every rank stops after the same step: when any rank's clock ran out (a
+                // failed agreement stops too, and the next step reports it)
+                out_of_time = layout
+                    .sum(&[f64::from(u8::from(out_of_time))])
+                    .map_or(true, |v| v[0] > 0.0);
+            }
+            if out_of_time {
                 report.stopped = Some(StepLimit::Seconds(seconds));
                 return false;
             }
@@ -231,7 +271,8 @@ impl<const D: usize> Engine for Coupled<D> {
     }
 
     fn particles(&self, stride: usize) -> Vec<ParticleState> {
-        let p = &self.sim.sys.particles;
+        let whole = self.whole();
+        let p = &*whole;
         (0..p.len())
             .step_by(stride)
             .map(|i| ParticleState {
@@ -263,7 +304,8 @@ impl<const D: usize> Engine for Coupled<D> {
     }
 
     fn patch_members(&self, specs: &[PatchSpec]) -> Vec<PatchMembers> {
-        let p = &self.sim.sys.particles;
+        let whole = self.whole();
+        let p = &*whole;
         specs
             .iter()
             .map(|s| {
@@ -291,31 +333,62 @@ impl<const D: usize> Engine for Coupled<D> {
     }
 
     fn patches(&self, members: &[PatchMembers]) -> Vec<PatchValue> {
-        let p = &self.sim.sys.particles;
-        // stable id → current index (particles are reordered for locality; ports create
-        // particles with ids beyond the count)
-        let ids = p.id.iter().copied().max().map_or(0, |m| m as usize + 1);
-        let mut index = vec![0usize; ids];
-        for (i, &id) in p.id.iter().enumerate() {
+        let sys = &self.sim.sys;
+        let p = &sys.particles;
+        // stable id → index of this process's own particles (particles are reordered for
+        // locality; ports create particles with ids beyond the count; in a distributed run
+        // the other ranks hold the rest)
+        let own = sys.owned();
+        let ids = p.id[..own]
+            .iter()
+            .copied()
+            .max()
+            .map_or(0, |m| m as usize + 1);
+        let mut index = vec![usize::MAX; ids];
+        for (i, &id) in p.id[..own].iter().enumerate() {
             index[id as usize] = i;
+        }
+        let at = |id: &u32| {
+            index
+                .get(*id as usize)
+                .copied()
+                .filter(|&i| i != usize::MAX)
+        };
+        // per patch: the force (D) and the surface pressures' sum, summed exactly so that
+        // the patch reads the same bits on any number of ranks (`parallel::exact`)
+        let width = D + 1;
+        let mut sums = registers(members.len() * width);
+        let mut peaks = vec![f64::NEG_INFINITY; members.len()];
+        for (k, m) in members.iter().enumerate() {
+            let s = &mut sums[k * width..(k + 1) * width];
+            for i in m.all.iter().filter_map(at) {
+                for (r, f) in s.iter_mut().zip(p.wall_force[i].iter()) {
+                    r.add(*f);
+                }
+            }
+            for i in m.surface.iter().filter_map(at) {
+                s[D].add(p.pressure[i]);
+                peaks[k] = peaks[k].max(p.pressure[i]);
+            }
+        }
+        if let Some(ranks) = &sys.ranks {
+            ranks.merge_in_place(&mut sums);
+            ranks.max_in_place(&mut peaks);
         }
         members
             .iter()
-            .map(|m| {
-                let mut f = Vector::<D>::zeros();
-                for &id in &m.all {
-                    f += p.wall_force[index[id as usize]];
-                }
-                let pressures = m.surface.iter().map(|&id| p.pressure[index[id as usize]]);
-                let (sum, peak) = pressures.fold((0.0, f64::NEG_INFINITY), |(s, pk), x| {
-                    (s + x, f64::max(pk, x))
-                });
-                PatchValue {
-                    mean_pressure: sum / m.surface.len() as f64,
-                    peak_pressure: peak,
-                    area: m.surface.len() as f64 * m.cell_area,
-                    force: array(&f),
-                }
+            .zip(sums.chunks_exact(width).zip(&peaks))
+            .map(|(m, (s, &peak))| PatchValue {
+                mean_pressure: s[D].value() / m.surface.len() as f64,
+                peak_pressure: peak,
+                area: m.surface.len() as f64 * m.cell_area,
+                force: {
+                    let mut f = [0.0; 3];
+                    for (o, r) in f.iter_mut().zip(&s[..D]) {
+                        *o = r.value();
+                    }
+                    f
+                },
             })
             .collect()
     }
@@ -328,7 +401,7 @@ impl<const D: usize> Engine for Coupled<D> {
         crate::io::write_vtu(path, &self.sim.sys.particles, self.sim.time)
     }
 
-    fn save(&self, fingerprint: u64) -> Vec<u8> {
+    fn save(&self, fingerprint: u64) -> Result<Vec<u8>, String> {
         state::save(self, fingerprint)
     }
 

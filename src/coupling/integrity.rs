@@ -172,7 +172,12 @@ fn pose_ok<const D: usize>(what: &str, p: &Pose<D>) -> Result<(), String> {
     Ok(())
 }
 
-pub(super) fn check<const D: usize>(s: &Saved<D>, c: &Coupled<D>) -> Result<(), String> {
+/// `lists`: the state holds its neighbour lists (saved by a single process).
+pub(super) fn check<const D: usize>(
+    s: &Saved<D>,
+    c: &Coupled<D>,
+    lists: bool,
+) -> Result<(), String> {
     let sys = &c.sim.sys;
     match (&s.frame_held, &sys.frame) {
         (None, None) => {}
@@ -265,6 +270,22 @@ pub(super) fn check<const D: usize>(s: &Saved<D>, c: &Coupled<D>) -> Result<(), 
             ));
         }
     }
+    if lists {
+        neighbour_lists(s, n)?;
+    }
+    if s.integrator.kind != c.sim.integrator.kind {
+        return Err(format!(
+            "integrator {} (this instance runs {})",
+            s.integrator.kind.name(),
+            c.sim.integrator.kind.name()
+        ));
+    }
+    s.integrator.check()?;
+    all_finite("the scheme's carried state", s.scheme.iter())?;
+    Ok(())
+}
+
+fn neighbour_lists<const D: usize>(s: &Saved<D>, n: usize) -> Result<(), String> {
     s.grid.check(n)?;
     s.neighbours.check(n)?;
     let v = &s.verlet;
@@ -280,14 +301,5 @@ pub(super) fn check<const D: usize>(s: &Saved<D>, c: &Coupled<D>) -> Result<(), 
         positive("master-list radius", &v.reach)?;
         v.list.check(n)?;
     }
-    if s.integrator.kind != c.sim.integrator.kind {
-        return Err(format!(
-            "integrator {} (this instance runs {})",
-            s.integrator.kind.name(),
-            c.sim.integrator.kind.name()
-        ));
-    }
-    s.integrator.check()?;
-    all_finite("the scheme's carried state", s.scheme.iter())?;
     Ok(())
 }

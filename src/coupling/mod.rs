@@ -240,6 +240,18 @@ pub struct Coupling {
 impl Coupling {
     /// Build the solver for `case` with `options` (particles, first evaluation).
     pub fn new(case: &Case, options: &CouplingOptions) -> Result<Self, CouplingError> {
+        Self::new_on(case, options, None)
+    }
+
+    /// [`Self::new`], the particles shared among `ranks` when given (`parallel`): every rank
+    /// builds it with the same case and options, and from then on makes the same calls in the
+    /// same order (inputs, steps, reads, saves), since most of them are collectives. The
+    /// outputs and saved states are the whole case's on every rank.
+    pub fn new_on(
+        case: &Case,
+        options: &CouplingOptions,
+        ranks: Option<std::sync::Arc<dyn crate::parallel::comm::Comm>>,
+    ) -> Result<Self, CouplingError> {
         let case = options.apply(case)?;
         if case.scheme.relativistic() {
             return Err(CouplingError(
@@ -257,7 +269,7 @@ impl Coupling {
             .num_threads(threads)
             .build()
             .map_err(|e| CouplingError(format!("threads: cannot start {threads} workers ({e})")))?;
-        let engine = pool.install(|| engine::build(&case))?;
+        let engine = pool.install(|| engine::build(&case, ranks))?;
         let specs: Vec<engine::PatchSpec> = case
             .patches
             .iter()
@@ -542,9 +554,13 @@ impl Coupling {
     }
 
     /// The whole solver state as bytes; [`Self::restore`] of them continues bit for bit as
-    /// this instance would.
-    pub fn save(&self) -> Vec<u8> {
-        self.engine.save(state::fingerprint(&self.case))
+    /// this instance would. In a distributed run a collective, which fails when the ranks
+    /// cannot exchange; its bytes are the same on every rank, and restore on any number of
+    /// ranks.
+    pub fn save(&self) -> Result<Vec<u8>, CouplingError> {
+        self.engine
+            .save(state::fingerprint(&self.case))
+            .map_err(CouplingError)
     }
 
     /// Return to a state from [`Self::save`] of a Coupling built from the same case and

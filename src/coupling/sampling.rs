@@ -2,6 +2,7 @@
 //! points per communication step costs one pass over the particles each).
 
 use super::{PortValue, ProbeValue};
+use crate::parallel::exact::{registers, ExactSum};
 use crate::particles::Vector;
 use crate::system::System;
 use rayon::prelude::*;
@@ -19,77 +20,56 @@ struct Sums<const D: usize> {
     wr: Vector<D>,
 }
 
-impl<const D: usize> Sums<D> {
-    fn zero() -> Self {
-        Self {
-            vw: 0.0,
-            rho: 0.0,
-            p: 0.0,
-            v: Vector::zeros(),
-            w: 0.0,
-            wp: 0.0,
-            wr: Vector::zeros(),
-        }
-    }
-    fn add(mut self, o: Self) -> Self {
-        self.vw += o.vw;
-        self.rho += o.rho;
-        self.p += o.p;
-        self.v += o.v;
-        self.w += o.w;
-        self.wp += o.wp;
-        self.wr += o.wr;
-        self
-    }
+/// How many numbers a [`Sums`] holds.
+const fn width(d: usize) -> usize {
+    5 + 2 * d
 }
 
 /// [`Sums`] over this process's fluid particles (a distributed run's halo copies are their
-/// owners' to count), summed over the ranks.
+/// owners' to count), over every rank. Each total is summed exactly (`parallel::exact`), so
+/// a probe reads the same bits whichever rank owns which particle, in whatever order, and
+/// whatever the threads' share of the loop.
 fn sums<const D: usize>(sys: &System<D>, x: &Vector<D>) -> Sums<D> {
-    let mine = own_sums(sys, x);
-    let Some(ranks) = &sys.ranks else {
-        return mine;
-    };
-    let mut flat = vec![mine.vw, mine.rho, mine.p, mine.w, mine.wp];
-    flat.extend(mine.v.iter().chain(mine.wr.iter()));
-    ranks.sum_in_place(&mut flat);
-    Sums {
-        vw: flat[0],
-        rho: flat[1],
-        p: flat[2],
-        w: flat[3],
-        wp: flat[4],
-        v: Vector::from_column_slice(&flat[5..5 + D]),
-        wr: Vector::from_column_slice(&flat[5 + D..]),
-    }
-}
-
-fn own_sums<const D: usize>(sys: &System<D>, x: &Vector<D>) -> Sums<D> {
     let p = &sys.particles;
     let k = &sys.kernel;
-    (0..sys.owned())
+    let add = |mut acc: Vec<ExactSum>, f: usize| {
+        let r = x - p.pos[f];
+        let d = r.norm();
+        if p.body[f] != 0 || d >= k.radius(p.h[f]) {
+            return acc;
+        }
+        let w = k.w(d, p.h[f]);
+        let vw = p.mass[f] / p.rho[f] * w;
+        let terms = [vw, vw * p.rho[f], vw * p.pressure[f], w, w * p.pressure[f]];
+        let (v, wr) = (p.vel[f] * vw, r * (w * p.rho[f]));
+        let vectors = v.iter().chain(wr.iter()).copied();
+        for (s, t) in acc.iter_mut().zip(terms.into_iter().chain(vectors)) {
+            s.add(t);
+        }
+        acc
+    };
+    let merge = |mut a: Vec<ExactSum>, b: Vec<ExactSum>| {
+        a.iter_mut().zip(&b).for_each(|(a, b)| a.merge(b));
+        a
+    };
+    let mut total = (0..sys.owned())
         .into_par_iter()
         .with_min_len(1024)
-        .filter(|&f| p.body[f] == 0)
-        .map(|f| {
-            let r = x - p.pos[f];
-            let d = r.norm();
-            if d >= k.radius(p.h[f]) {
-                return Sums::zero();
-            }
-            let w = k.w(d, p.h[f]);
-            let vw = p.mass[f] / p.rho[f] * w;
-            Sums {
-                vw,
-                rho: vw * p.rho[f],
-                p: vw * p.pressure[f],
-                v: p.vel[f] * vw,
-                w,
-                wp: w * p.pressure[f],
-                wr: r * (w * p.rho[f]),
-            }
-        })
-        .reduce(Sums::zero, Sums::add)
+        .fold(|| registers(width(D)), add)
+        .reduce(|| registers(width(D)), merge);
+    if let Some(ranks) = &sys.ranks {
+        ranks.merge_in_place(&mut total);
+    }
+    let t: Vec<f64> = total.iter().map(ExactSum::value).collect();
+    Sums {
+        vw: t[0],
+        rho: t[1],
+        p: t[2],
+        w: t[3],
+        wp: t[4],
+        v: Vector::from_column_slice(&t[5..5 + D]),
+        wr: Vector::from_column_slice(&t[5 + D..]),
+    }
 }
 
 /// Shepard-interpolated ρ, P, v at a fixed point (normalised by Σ V W, reported as the

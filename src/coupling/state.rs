@@ -30,13 +30,19 @@ use serde::{Deserialize, Serialize};
 const MAGIC: [u8; 8] = *b"sphfmu\0s";
 /// 3: the checksummed envelope. 4: the cell grid keeps a width and a period per axis.
 /// 5: body poses are quaternions with angular velocity vectors; the frame's pose a master set.
-const VERSION: u32 = 5;
+/// 6: the number of ranks that saved it.
+const VERSION: u32 = 6;
 
 #[derive(Serialize, Deserialize)]
 struct Header {
     dimension: u32,
     fingerprint: u64,
     particles: u64,
+    /// 0: saved by a single process, with its neighbour lists. R ≥ 1: saved by a run on R
+    /// ranks (`parallel`): the whole case's particles in id order and no neighbour lists (a
+    /// rank's lists index its own particles and halo). Either restores on any number of
+    /// ranks: the particles are split anew, and the lists rebuilt.
+    ranks: u32,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -68,13 +74,40 @@ pub fn fingerprint(case: &Case) -> u64 {
     })
 }
 
-pub(super) fn save<const D: usize>(c: &Coupled<D>, fingerprint: u64) -> Vec<u8> {
+/// The state of `c`; in a distributed run a collective (every rank calls it and gets the
+/// same bytes), which fails when the ranks cannot exchange.
+pub(super) fn save<const D: usize>(c: &Coupled<D>, fingerprint: u64) -> Result<Vec<u8>, String> {
     let sim = &c.sim;
     let sys = &sim.sys;
+    let (particles, ranks, grid, verlet, neighbours, stats, integrator) = match &sim.layout {
+        None => (
+            sys.particles.clone(),
+            0,
+            sys.grid.clone(),
+            sys.verlet.clone(),
+            sys.neighbours.clone(),
+            sys.stats,
+            sim.integrator.clone(),
+        ),
+        // the same bytes on every rank: nothing of one rank's own (its lists, its counters,
+        // its integrator's stage arrays, refilled at every step's start)
+        Some(layout) => (
+            layout
+                .gather(sys)
+                .map_err(|e| format!("distributed run: {e}"))?,
+            layout.exchange().0 as u32,
+            CellGrid::default(),
+            VerletList::default(),
+            NeighbourList::default(),
+            EvalStats::default(),
+            Integrator::new(sim.integrator.kind),
+        ),
+    };
     let header = Header {
         dimension: D as u32,
         fingerprint,
-        particles: sys.particles.len() as u64,
+        particles: particles.len() as u64,
+        ranks,
     };
     let saved = Saved::<D> {
         time: sim.time,
@@ -82,20 +115,20 @@ pub(super) fn save<const D: usize>(c: &Coupled<D>, fingerprint: u64) -> Vec<u8> 
         last_dt: sim.last_dt,
         dirty: c.dirty,
         gravity: sys.gravity,
-        particles: sys.particles.clone(),
+        particles,
         bodies: sys.bodies.clone(),
         frame_held: sys.frame.as_ref().map(|f| f.held),
         ports: sys.ports.clone(),
-        grid: sys.grid.clone(),
-        verlet: sys.verlet.clone(),
-        neighbours: sys.neighbours.clone(),
-        stats: sys.stats,
-        integrator: sim.integrator.clone(),
+        grid,
+        verlet,
+        neighbours,
+        stats,
+        integrator,
         scheme: sim.scheme.carried_state(),
     };
     let mut payload = postcard::to_stdvec(&header).expect("a header always encodes");
     payload.extend(postcard::to_stdvec(&saved).expect("the solver state always encodes"));
-    seal(&MAGIC, VERSION, &payload)
+    Ok(seal(&MAGIC, VERSION, &payload))
 }
 
 /// `magic | version (u32 LE) | payload length (u64 LE) | CRC-32 of the payload (u32 LE) |
@@ -173,7 +206,8 @@ pub(super) fn restore<const D: usize>(
         return Err("state: damaged (particle count does not match its header)".into());
     }
     // every invariant a later step relies on, before anything of the instance changes
-    super::integrity::check(&saved, c).map_err(|e| format!("state: damaged ({e})"))?;
+    let lists = header.ranks == 0;
+    super::integrity::check(&saved, c, lists).map_err(|e| format!("state: damaged ({e})"))?;
     let sim = &mut c.sim;
     sim.scheme
         .set_carried_state(&saved.scheme)
@@ -185,7 +219,11 @@ pub(super) fn restore<const D: usize>(
     c.dirty = saved.dirty;
     let sys = &mut sim.sys;
     sys.gravity = saved.gravity;
-    sys.particles = saved.particles;
+    match &mut sim.layout {
+        // split among this run's ranks, whatever the number that saved it
+        Some(layout) => layout.replace(sys, saved.particles),
+        None => sys.particles = saved.particles,
+    }
     let mut bodies = saved.bodies;
     for (b, now) in bodies.iter_mut().zip(&sys.bodies) {
         b.motion = now.motion.clone();
@@ -205,9 +243,14 @@ pub(super) fn restore<const D: usize>(
         }
         f.place(saved.time);
     }
-    sys.grid = saved.grid;
-    sys.verlet = saved.verlet;
-    sys.neighbours = saved.neighbours;
+    if lists && sim.layout.is_none() {
+        sys.grid = saved.grid;
+        sys.verlet = saved.verlet;
+        sys.neighbours = saved.neighbours;
+    } else {
+        // (`replace` cleared them on a run on ranks)
+        sys.reset_neighbours();
+    }
     sys.stats = saved.stats;
     Ok(())
 }

@@ -11,7 +11,8 @@
 //! instead of one per pass. The price is the halo's redundant work, which `make bench`
 //! measures; exchanging between passes instead is left for when it is measured to pay.
 
-use super::comm::Comm;
+use super::comm::{Comm, CommError};
+use super::exact::{registers, ExactSum};
 use crate::particles::Particles;
 use crate::scheme::{compatible::PairWork, rosswog::TriggerLevels, Scheme, SchemeError};
 use crate::system::System;
@@ -61,15 +62,35 @@ impl std::fmt::Debug for Link {
 }
 
 impl crate::system::RankSums for Link {
-    fn sum_in_place(&self, x: &mut [f64]) {
-        match crate::parallel::comm::Reduce::sum(&*self.comm, x) {
-            Ok(total) => x.copy_from_slice(&total),
-            Err(e) => {
-                self.failure
-                    .lock()
-                    .unwrap_or_else(|e| e.into_inner())
-                    .get_or_insert(e.to_string());
+    fn merge_in_place(&self, x: &mut [ExactSum]) {
+        let mine: Vec<u8> = x.iter().flat_map(|s| s.to_bytes()).collect();
+        let merged = self.comm.all_gather(mine).and_then(|all| {
+            let mut total = registers(x.len());
+            for part in &all {
+                let parts = part.chunks_exact(ExactSum::BYTES);
+                if parts.len() != x.len() || !parts.remainder().is_empty() {
+                    return Err(CommError(format!(
+                        "a sum over ranks of {} numbers met a rank with {} bytes",
+                        x.len(),
+                        part.len()
+                    )));
+                }
+                for (t, b) in total.iter_mut().zip(parts) {
+                    t.merge(&ExactSum::from_bytes(b).map_err(CommError)?);
+                }
             }
+            Ok(total)
+        });
+        match merged {
+            Ok(total) => x.clone_from_slice(&total),
+            Err(e) => self.fail(e.to_string()),
+        }
+    }
+
+    fn max_in_place(&self, x: &mut [f64]) {
+        match crate::parallel::comm::Reduce::max_each(&*self.comm, x) {
+            Ok(top) => x.copy_from_slice(&top),
+            Err(e) => self.fail(e.to_string()),
         }
     }
 }

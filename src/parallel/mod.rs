@@ -11,6 +11,7 @@
 //! round-off, not to the bit, across rank counts.
 
 pub mod comm;
+pub mod exact;
 mod halo;
 #[cfg(feature = "mpi")]
 pub mod mpi;
@@ -372,7 +373,12 @@ impl<const D: usize> Layout<D> for Decomposition<D> {
             ids[..own].iter().max().map_or(0.0, |&m| m as f64 + 1.0),
             f64::from(u8::from(crossings.changed)),
         ];
-        mine.extend(crossings.copies.iter().map(|&(i, _)| ids[i as usize] as f64));
+        mine.extend(
+            crossings
+                .copies
+                .iter()
+                .map(|&(i, _)| ids[i as usize] as f64),
+        );
         let rows: Vec<Vec<f64>> = comm
             .all_gather(comm::f64_bytes(&mine))
             .map_err(|e| e.to_string())?
@@ -383,7 +389,10 @@ impl<const D: usize> Layout<D> for Decomposition<D> {
             return Ok(());
         }
         let next_id = rows.iter().map(|r| r[0]).fold(0.0, f64::max) as u32;
-        let mut sources: Vec<u32> = rows.iter().flat_map(|r| r[2..].iter().map(|&x| x as u32)).collect();
+        let mut sources: Vec<u32> = rows
+            .iter()
+            .flat_map(|r| r[2..].iter().map(|&x| x as u32))
+            .collect();
         sources.sort_unstable();
         let new_ids: Vec<u32> = crossings
             .copies
@@ -397,6 +406,32 @@ impl<const D: usize> Layout<D> for Decomposition<D> {
         sys.apply_port_crossings(crossings, &new_ids);
         self.stale = true;
         Ok(())
+    }
+
+    fn refresh(&mut self, sys: &mut System<D>, dt: f64) -> Result<(), String> {
+        self.migrate(sys)?;
+        self.build_halo(sys, dt)
+    }
+
+    fn gather(&self, sys: &System<D>) -> Result<Particles<D>, String> {
+        gather_owned(sys, self.comm())
+    }
+
+    fn replace(&mut self, sys: &mut System<D>, all: Particles<D>) {
+        let me = self.comm().rank();
+        // the new particles' h may exceed what the current halo allowed for: the next halo
+        // allows for theirs (h_floor), and nothing is checked against the old one
+        self.h_floor = all.h.iter().cloned().fold(0.0, f64::max);
+        self.h_allowed = 0.0;
+        let mine: Vec<u32> = (0..all.len() as u32)
+            .filter(|&i| self.regions.owner(&all.pos[i as usize]) == me)
+            .collect();
+        sys.particles = all;
+        sys.particles.permute(&mine);
+        sys.halo = 0;
+        sys.reset_neighbours();
+        self.built_at.clear();
+        self.stale = true;
     }
 
     fn sum(&self, x: &[f64]) -> Result<Vec<f64>, String> {
@@ -447,10 +482,13 @@ pub fn gather_particles<const D: usize>(
     sim: &Simulation<D>,
     comm: &dyn Comm,
 ) -> Result<Particles<D>, String> {
-    let own = sim
-        .sys
+    gather_owned(&sim.sys, comm)
+}
+
+fn gather_owned<const D: usize>(sys: &System<D>, comm: &dyn Comm) -> Result<Particles<D>, String> {
+    let own = sys
         .particles
-        .selected(&(0..sim.sys.owned() as u32).collect::<Vec<_>>());
+        .selected(&(0..sys.owned() as u32).collect::<Vec<_>>());
     let bytes = postcard::to_stdvec(&own).map_err(|e| e.to_string())?;
     let all = comm.all_gather(bytes).map_err(|e| e.to_string())?;
     let mut out = Particles::<D>::default();

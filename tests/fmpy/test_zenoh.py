@@ -154,7 +154,7 @@ def test_the_fmu_as_a_proxy_of_a_node_equals_the_local_fmu():
     assert r["identical"], r["max_difference"]
     # getFMUState / setFMUState carry the node's state: the replay is bit for bit
     assert r["restored_t"] == pytest.approx(0.6) and r["replay_same"]
-    # a bad input is the node's error, logged by the proxy; the step did not happen
+    # a bad input is refused at the set, as by the local FMU, and logged; no step happened
     assert "gravity[3]: must be 0 in a 2D case" in r["bad_input"], r["bad_input"]
     assert r["after_bad_t"] == pytest.approx(1.2)
     # the node killed: an error with a log line naming the node, and this process lives on

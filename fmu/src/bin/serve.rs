@@ -7,12 +7,14 @@
 //! taking live inputs) and then keeps serving.
 
 use clap::Parser;
+use sphfmu::parallel::comm::Comm;
 use sphfmu_fmu::bridge::error_payload;
 use sphfmu_fmu::bridge::node::{handle, set_text, Op, OPS};
+use sphfmu_fmu::instance::inputs::Snapshot;
 use sphfmu_fmu::instance::{Instance, Status};
 use std::io::Write;
 use std::path::PathBuf;
-use std::sync::mpsc;
+use std::sync::{mpsc, Arc};
 use zenoh::bytes::Encoding;
 use zenoh::query::Query;
 use zenoh::Wait;
@@ -66,7 +68,10 @@ struct Args {
     verbose: bool,
 }
 
-fn setup(a: &Args) -> Result<Instance, String> {
+/// The ranks of `mpirun -n R sphfmu serve` (None when started alone).
+type Ranks = Option<Arc<dyn Comm>>;
+
+fn setup(a: &Args, ranks: &Ranks) -> Result<Instance, String> {
     let folder = a
         .case
         .parent()
@@ -83,6 +88,14 @@ fn setup(a: &Args) -> Result<Instance, String> {
         eprintln!("sphfmu-serve [{s:?}] {cat}: {msg}");
     });
     let mut inst = Instance::with_case("node", &folder, &file, logger)?;
+    let leader = ranks.as_ref().is_none_or(|c| c.rank() == 0);
+    if let Some(comm) = ranks {
+        inst.share_among(comm.clone());
+        // the cores shared among the ranks on this machine, unless --set threads says
+        if let Some(n) = sphfmu::parallel::threads_per_rank() {
+            set_text(&mut inst, "threads", &n.to_string())?;
+        }
+    }
     // the default listener only when nothing else says where to be reached
     let listen = a.listen.clone().unwrap_or_else(|| {
         if a.connect.is_empty() && a.config.is_empty() {
@@ -100,8 +113,9 @@ fn setup(a: &Args) -> Result<Instance, String> {
         ("zenoh.staleness", a.staleness.to_string()),
         ("zenoh.on_stale", a.on_stale.clone()),
     ];
-    for (k, v) in zenoh {
-        set_text(&mut inst, k, &v)?;
+    // under mpirun rank 0 alone joins zenoh: it answers, and hands every request to the others
+    for (k, v) in zenoh.iter().filter(|_| leader) {
+        set_text(&mut inst, k, v)?;
     }
     if a.mode == "off" {
         return Err("--mode: must be peer or client (a node without zenoh serves nobody)".into());
@@ -151,10 +165,90 @@ fn reply(q: &Query, op: Op, r: Result<Vec<u8>, String>) {
     }
 }
 
-fn serve(a: Args) -> Result<(), String> {
-    let mut inst = setup(&a)?;
+/// What rank 0 hands to every rank: a request to answer, a step of `--run`, or the end.
+enum Command {
+    Request(Op, Option<Vec<u8>>),
+    SelfStep(f64),
+    End,
+}
+
+impl Command {
+    fn encode(&self) -> Vec<u8> {
+        match self {
+            Command::Request(op, payload) => {
+                let i = OPS.iter().position(|o| o.1 == *op).expect("listed") as u8;
+                let mut b = vec![0, i, u8::from(payload.is_some())];
+                b.extend(payload.iter().flatten());
+                b
+            }
+            Command::SelfStep(h) => [&[1u8][..], &h.to_le_bytes()].concat(),
+            Command::End => vec![2],
+        }
+    }
+
+    fn decode(b: &[u8]) -> Result<Command, String> {
+        match b {
+            [0, i, has, rest @ ..] if (*i as usize) < OPS.len() => Ok(Command::Request(
+                OPS[*i as usize].1,
+                (*has == 1).then(|| rest.to_vec()),
+            )),
+            [1, h @ ..] if h.len() == 8 => Ok(Command::SelfStep(f64::from_le_bytes(
+                h.try_into().expect("8 bytes"),
+            ))),
+            [2] => Ok(Command::End),
+            _ => Err("a command from rank 0 that this build does not know".into()),
+        }
+    }
+}
+
+/// Rank 0's `cmd` on every rank (a collective; the others pass None).
+fn share(ranks: &Ranks, cmd: Option<&Command>) -> Result<Option<Command>, String> {
+    let Some(comm) = ranks else {
+        return Ok(None);
+    };
+    let mine = cmd.map(Command::encode).unwrap_or_default();
+    let all = comm.all_gather(mine).map_err(|e| format!("ranks: {e}"))?;
+    Command::decode(&all[0]).map(Some)
+}
+
+/// A step of `--run` (every rank takes it); false when it failed and --run ends.
+fn self_step(inst: &mut Instance, h: f64) -> bool {
+    let now = inst.time();
+    match inst.do_step(now, h) {
+        Ok(_) => true,
+        Err(e) => {
+            eprintln!("sphfmu-serve: --run stopped at t = {now}: {}", e.1);
+            false
+        }
+    }
+}
+
+/// Ranks 1.. of a node under mpirun: do what rank 0 hands over, until it ends.
+fn follow(mut inst: Instance, ranks: &Ranks, initial: &Snapshot) -> Result<(), String> {
+    loop {
+        match share(ranks, None)?.expect("under mpirun") {
+            Command::Request(op, payload) => {
+                // the same call as rank 0's, with the same outcome; rank 0 replies
+                let _ = handle(&mut inst, op, payload.as_deref(), initial);
+                if op == Op::Stop {
+                    return Ok(());
+                }
+            }
+            Command::SelfStep(h) => {
+                self_step(&mut inst, h);
+            }
+            Command::End => return Ok(()),
+        }
+    }
+}
+
+fn serve(a: Args, ranks: Ranks) -> Result<(), String> {
+    let mut inst = setup(&a, &ranks)?;
     // what `reset` goes back to
     let initial = inst.get_state().map_err(|e| e.1)?;
+    if ranks.as_ref().is_some_and(|c| c.rank() != 0) {
+        return follow(inst, &ranks, &initial);
+    }
     let session = inst.live_session().expect("zenoh mode is on");
     let prefix = inst.live_prefix();
     let (tx, rx) = mpsc::channel::<(Op, Query)>();
@@ -171,8 +265,11 @@ fn serve(a: Args) -> Result<(), String> {
             .map_err(|e| format!("zenoh: queryable {prefix}/{name}: {e}"))?;
         queryables.push(q);
     }
+    let on = ranks
+        .as_ref()
+        .map_or(String::new(), |c| format!(", on {} ranks", c.size()));
     println!(
-        "sphfmu-serve: ready, prefix {prefix}, zenoh id {}",
+        "sphfmu-serve: ready, prefix {prefix}{on}, zenoh id {}",
         session.zid()
     );
     let _ = std::io::stdout().flush();
@@ -182,10 +279,9 @@ fn serve(a: Args) -> Result<(), String> {
             Some(end) if inst.time() < end - 1e-12 => match rx.try_recv() {
                 Ok(x) => Some(x),
                 Err(mpsc::TryRecvError::Empty) => {
-                    let now = inst.time();
-                    let h = a.step.min(end - now);
-                    if let Err(e) = inst.do_step(now, h) {
-                        eprintln!("sphfmu-serve: --run stopped at t = {now}: {}", e.1);
+                    let h = a.step.min(end - inst.time());
+                    share(&ranks, Some(&Command::SelfStep(h)))?;
+                    if !self_step(&mut inst, h) {
                         run = None;
                     }
                     continue;
@@ -194,8 +290,12 @@ fn serve(a: Args) -> Result<(), String> {
             },
             _ => rx.recv().ok(),
         };
-        let Some((op, q)) = next else { break };
+        let Some((op, q)) = next else {
+            share(&ranks, Some(&Command::End))?;
+            break;
+        };
         let payload = q.payload().map(|p| p.to_bytes().to_vec());
+        share(&ranks, Some(&Command::Request(op, payload.clone())))?;
         let r = handle(&mut inst, op, payload.as_deref(), &initial);
         reply(&q, op, r);
         if op == Op::Stop {
@@ -208,7 +308,14 @@ fn serve(a: Args) -> Result<(), String> {
 
 fn main() {
     let a = Args::parse();
-    if let Err(e) = serve(a) {
+    let ranks = match sphfmu::parallel::launched() {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("sphfmu serve: {e}");
+            std::process::exit(1);
+        }
+    };
+    if let Err(e) = serve(a, ranks) {
         eprintln!("sphfmu serve: {e}");
         std::process::exit(1);
     }

@@ -70,6 +70,18 @@ impl Instance {
         #[cfg(feature = "zenoh")]
         if let Some(b) = self.bridge.as_mut() {
             let x = b.exchange();
+            if self.distributed() {
+                // every rank must step with the same inputs, and only rank 0 hears zenoh:
+                // a node on several ranks takes its inputs through `<prefix>/set`
+                if !x.apply.is_empty() {
+                    self.log(
+                        Status::Warning,
+                        "logStatusWarning",
+                        "zenoh input ignored: a node on several ranks takes inputs through <prefix>/set only",
+                    );
+                }
+                return self.apply_inputs();
+            }
             for w in &x.warnings {
                 self.log(Status::Warning, "logStatusWarning", w);
             }
@@ -115,7 +127,9 @@ impl Instance {
         #[cfg(feature = "zenoh")]
         {
             use ciborium::Value;
-            if self.bridge.is_none() {
+            // on a node under mpirun only rank 0 publishes, but every rank reads the outputs
+            // (the reads are collectives: they sum or gather over the ranks)
+            if self.bridge.is_none() && !self.distributed() {
                 return;
             }
             let mut values = std::collections::HashMap::new();
@@ -138,11 +152,10 @@ impl Instance {
                 .map(|c| c.particles(1))
                 .unwrap_or_default();
             let t = self.time();
-            let sent = self.bridge.as_ref().expect("checked above").publish(
-                t,
-                |i| values.remove(&i),
-                particles,
-            );
+            let Some(bridge) = self.bridge.as_ref() else {
+                return;
+            };
+            let sent = bridge.publish(t, |i| values.remove(&i), particles);
             if let Err(e) = sent {
                 self.log(Status::Warning, "logStatusWarning", &e);
             }

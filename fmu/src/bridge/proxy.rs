@@ -92,6 +92,7 @@ impl RemoteNode {
     fn ask(&self, op: &str, payload: Vec<u8>, timeout: Duration) -> Result<Vec<u8>, RemoteError> {
         let key = format!("{}/{op}", self.prefix);
         let gone = |why: String| RemoteError::Unreachable(format!("{key}: {why}"));
+        let asked = Instant::now();
         let replies = self
             .session
             .get(&key)
@@ -99,9 +100,15 @@ impl RemoteNode {
             .timeout(timeout)
             .wait()
             .map_err(|e| gone(format!("request not sent ({e})")))?;
-        let reply = replies
-            .recv()
-            .map_err(|_| gone(format!("no reply within {} s: is the node running?", timeout.as_secs_f64())))?;
+        let reply = replies.recv().map_err(|_| {
+            // the wait ends early when no node serves the key any more (it died, or its
+            // link is down), else at the time limit
+            if asked.elapsed() < timeout {
+                gone("no node serves it (it stopped, or cannot be reached)".into())
+            } else {
+                gone(format!("no reply within {} s", timeout.as_secs_f64()))
+            }
+        })?;
         match reply.result() {
             Ok(sample) => Ok(sample.payload().to_bytes().to_vec()),
             Err(e) => {
@@ -135,7 +142,8 @@ impl RemoteNode {
 
     /// Back to the node's state at the end of its initialisation.
     pub fn reset(&mut self) -> Result<(), RemoteError> {
-        self.request("reset", &map(vec![]), REPLY_TIMEOUT).map(|_| ())
+        self.request("reset", &map(vec![]), REPLY_TIMEOUT)
+            .map(|_| ())
     }
 
     /// Set inputs (all or nothing on the node).
@@ -144,8 +152,12 @@ impl RemoteNode {
             .into_iter()
             .map(|(n, x)| (Value::Text(n), codec::numbers(&x)))
             .collect();
-        self.request("set", &map(vec![("values", Value::Map(entries))]), REPLY_TIMEOUT)
-            .map(|_| ())
+        self.request(
+            "set",
+            &map(vec![("values", Value::Map(entries))]),
+            REPLY_TIMEOUT,
+        )
+        .map(|_| ())
     }
 
     /// Step the node by `h`; then read every output.

@@ -98,6 +98,9 @@ pub struct Instance {
     /// The node this instance forwards to (`remote`), once reached.
     #[cfg(feature = "zenoh")]
     pub(crate) remote: Option<crate::bridge::proxy::RemoteNode>,
+    /// The ranks this instance's solver is shared among (`sphfmu serve` under mpirun): every
+    /// rank holds an instance and makes the same calls in the same order.
+    ranks: Option<std::sync::Arc<dyn sphfmu::parallel::comm::Comm>>,
     output: Output,
     pub mode: Mode,
     start_time: f64,
@@ -155,6 +158,7 @@ impl Instance {
             bridge: None,
             #[cfg(feature = "zenoh")]
             remote: None,
+            ranks: None,
             output: Output::default(),
             mode: Mode::Instantiated,
             start_time: 0.0,
@@ -263,12 +267,30 @@ impl Instance {
         Ok(())
     }
 
+    /// Share the solver among `ranks` (before initialisation ends): the node under mpirun,
+    /// where every rank runs this instance and makes the same calls in the same order (most
+    /// reach collectives), and rank 0 alone talks to the outside.
+    pub fn share_among(&mut self, ranks: std::sync::Arc<dyn sphfmu::parallel::comm::Comm>) {
+        self.ranks = Some(ranks);
+        self.coupling.put(None);
+    }
+
+    /// Whether the solver is shared among ranks.
+    pub fn distributed(&self) -> bool {
+        self.ranks.is_some()
+    }
+
     /// Build the solver from the parameters (when not built yet).
     pub(crate) fn ensure_coupling(&mut self) -> CallResult<()> {
         if self.coupling.is_some() {
             return Ok(());
         }
         let p = &self.params;
+        if self.ranks.is_some() && !p.output_dir.trim().is_empty() {
+            return err(
+                "output_dir: a node on several ranks writes no snapshots of its own (`mpirun -n R sphfmu run` writes VTU pieces); leave output_dir empty",
+            );
+        }
         let path = if Path::new(&p.case).is_absolute() {
             PathBuf::from(&p.case)
         } else {
@@ -285,7 +307,8 @@ impl Instance {
             threads: p.threads as usize,
             limits: p.limits.size(),
         };
-        let c = Coupling::new(&case, &options).map_err(|e| (Status::Error, e.0))?;
+        let c = Coupling::new_on(&case, &options, self.ranks.clone())
+            .map_err(|e| (Status::Error, e.0))?;
         self.coupling.put(Some(c));
         Ok(())
     }
@@ -518,7 +541,9 @@ impl Instance {
         Ok(Snapshot {
             inputs: self.inputs.clone(),
             start_time: self.start_time,
-            solver: c.save(),
+            solver: c
+                .save()
+                .map_err(|e| (Status::Error, format!("getFMUState: {}", e.0)))?,
         })
     }
 

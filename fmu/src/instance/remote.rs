@@ -117,6 +117,9 @@ impl Instance {
             Err(RemoteError::Refused(m)) => Err((Status::Error, format!("remote {prefix:?}: {m}"))),
             Err(RemoteError::Unreachable(m)) => {
                 self.mode = Mode::Failed;
+                // the next call that needs a node reaches one anew (e.g. setFMUState to a
+                // node started again)
+                self.remote = None;
                 Err((
                     Status::Error,
                     format!("remote {prefix:?}: the node did not answer ({m}); restore a saved FMU state (to a node started anew) or reset"),
@@ -131,21 +134,29 @@ impl Instance {
         self.ensure_remote()?;
         let name = &self.table.variables[i].name;
         let node = self.remote.as_ref().expect("opened above");
-        node.output(name)
-            .map(|x| x.to_vec())
-            .ok_or_else(|| (Status::Error, format!("{name}: the remote node gave no value")))
+        node.output(name).map(|x| x.to_vec()).ok_or_else(|| {
+            (
+                Status::Error,
+                format!("{name}: the remote node gave no value"),
+            )
+        })
     }
 
     /// getFMUState of a proxy: the node's state bytes with this instance's inputs.
     #[cfg(feature = "zenoh")]
     pub(crate) fn get_state_remote(&self) -> CallResult<Snapshot> {
         let Some(node) = self.remote.as_ref() else {
-            return err("getFMUState: available once initialisation has ended (no solver state yet)");
+            return err(
+                "getFMUState: available once initialisation has ended (no solver state yet)",
+            );
         };
         let prefix = node.prefix.clone();
-        let solver = node
-            .save()
-            .map_err(|e| (Status::Error, format!("getFMUState: remote {prefix:?}: {}", e.message())))?;
+        let solver = node.save().map_err(|e| {
+            (
+                Status::Error,
+                format!("getFMUState: remote {prefix:?}: {}", e.message()),
+            )
+        })?;
         Ok(Snapshot {
             inputs: self.inputs.clone(),
             start_time: self.start_time,
@@ -161,8 +172,12 @@ impl Instance {
         self.ensure_remote()?;
         let node = self.remote.as_mut().expect("opened above");
         let prefix = node.prefix.clone();
-        node.restore(&s.solver)
-            .map_err(|e| (Status::Error, format!("setFMUState: remote {prefix:?}: {}", e.message())))?;
+        if let Err(e) = node.restore(&s.solver) {
+            if matches!(e, crate::bridge::proxy::RemoteError::Unreachable(_)) {
+                self.remote = None;
+            }
+            return err(format!("setFMUState: remote {prefix:?}: {}", e.message()));
+        }
         self.inputs = s.inputs.clone();
         self.start_time = s.start_time;
         self.mode = Mode::Step;
