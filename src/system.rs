@@ -111,8 +111,11 @@ pub struct System<const D: usize> {
     /// of v and u, and their Lorentz factors. `None` in Newtonian runs.
     pub relativistic: Option<crate::scheme::rosswog::sr::SrSlots>,
     /// Neighbour rows in the order of the particles' stable ids (not of their indices), so
-    /// that every per-particle sum is the same whatever the numbering: the distributed run
-    /// (`parallel`) sets it, and its particles then match bit for bit on any number of ranks.
+    /// that every per-particle sum is the same whatever the numbering: a distributed run
+    /// (`parallel`) then matches a single process bit for bit on any number of ranks. On by
+    /// default (cases build it so): sorting the rows at list builds cost nothing measurable
+    /// (`sphfmu run` of noh2d 5.4 s sorted against 6.0 s unsorted, dambreak2d 7.2 s both, 2
+    /// threads), and a local FMU then reads the same bits as a node under mpirun.
     pub canonical_order: bool,
     /// The last `halo` particles are copies of other ranks' particles (`parallel::halo`):
     /// evaluated with the rest, but neither stepped for the time step, counted in the totals

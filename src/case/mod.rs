@@ -471,7 +471,7 @@ impl Case {
             evolve_density: false,
             wall_pairs: false,
             relativistic: None,
-            canonical_order: false,
+            canonical_order: true,
             halo: 0,
             ranks: None,
             frame: self.frame.as_ref().map(|f| f.build::<D>()),

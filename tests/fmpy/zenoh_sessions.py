@@ -6,6 +6,7 @@ prints one JSON line with the results. The FMU (fmpy's FMU3Slave) or the node li
 loopback port chosen by the test; this process's zenoh peer connects to it (multicast off)."""
 import json
 import math
+import os
 import pathlib
 import subprocess
 import sys
@@ -409,15 +410,48 @@ def session_two_live_instances(fmu_path, port, prefix):
     }
 
 
-def start_node(port, prefix, case="slosh2d.toml"):
-    """`sphfmu serve` on a loopback listener; returns once it says it is ready."""
-    node = subprocess.Popen([str(ROOT / "target" / "release" / "sphfmu"), "serve",
-                             "--case", str(ROOT / "models" / case), "--prefix", prefix,
-                             "--listen", f"tcp/127.0.0.1:{port}", "--set", "threads=2"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+def start_node(port, prefix, case="slosh2d.toml", ranks=None):
+    """`sphfmu serve` on a loopback listener (under `mpirun -n ranks` when given); returns
+    once it says it is ready."""
+    serve = [str(ROOT / "target" / "release" / "sphfmu"), "serve",
+             "--case", str(ROOT / "models" / case), "--prefix", prefix,
+             "--listen", f"tcp/127.0.0.1:{port}"]
+    env = dict(os.environ)
+    if ranks:
+        # root in CI containers; idle ranks wait for rank 0's next request without spinning
+        env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+                   OMPI_MCA_mpi_yield_when_idle="1")
+        cmd = ["mpirun", "-n", str(ranks), "--oversubscribe"] + serve
+    else:
+        cmd = serve + ["--set", "threads=2"]
+    node = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     line = node.stdout.readline()
     assert "ready" in line, (line, node.stderr.read())
     return node
+
+
+def stop_node(node):
+    """End a node; mpirun passes SIGTERM on to its ranks (SIGKILL would orphan them)."""
+    if node.poll() is None:
+        node.terminate()
+        try:
+            node.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            node.kill()
+            node.wait(timeout=30)
+
+
+def rank_pid(prefix, rank):
+    """The process id of rank `rank` of the node serving `prefix` (from /proc)."""
+    for d in pathlib.Path("/proc").iterdir():
+        try:
+            cmd = (d / "cmdline").read_bytes()
+            env = (d / "environ").read_bytes()
+        except (OSError, ValueError):
+            continue
+        if prefix.encode() in cmd and f"OMPI_COMM_WORLD_RANK={rank}".encode() in env.split(b"\0"):
+            return int(d.name)
+    raise AssertionError(f"no rank {rank} serving {prefix}")
 
 
 def proxy_fmu(fmu_path, port, prefix):
@@ -497,6 +531,83 @@ def session_proxy_matches_local(fmu_path, port, prefix, n=60):
     finally:
         if node.poll() is None:
             node.kill()
+    return out
+
+
+def tank_rows(fmu, vr, t, k0, k1, h=0.02):
+    """Steps k0..k1-1 of the closed tank's run (constant gravity) on `fmu` from time t: the
+    tank's force and torque, the floor patch's mean and peak pressure and force."""
+    names = ["tank.force", "tank.torque", "patch.floor.force"]
+    rows = []
+    for _ in range(k0, k1):
+        fmu.doStep(t, h)
+        t += h
+        row = []
+        for n in names:
+            row += list(fmu.getFloat64([vr[n]], nValues=3))
+        rows.append(row + list(fmu.getFloat64([vr["patch.floor.mean_pressure"],
+                                               vr["patch.floor.peak_pressure"]])))
+    return rows, t
+
+
+def session_proxy_on_ranks(fmu_path, port, prefix, n=50):
+    """The proxy FMU driving a node under `mpirun -n 2` through the closed tank's run (issue
+    23): its outputs against the local FMU's and a node on 1 rank, a rollback replayed, one
+    rank killed in the middle of a step, and the run resumed on a node started anew."""
+    import threading
+    from fmpy.fmi1 import FMICallException
+    local_fmu, lvr = open_fmu(fmu_path)
+    local, _ = tank_rows(local_fmu, lvr, 0.0, 0, n)
+    local_fmu.terminate()
+    local_fmu.freeInstance()
+    out = {}
+    node = start_node(port, prefix + "/one", case="closed-tank2d.toml", ranks=1)
+    try:
+        fmu, vr = proxy_fmu(fmu_path, port, prefix + "/one")
+        one, _ = tank_rows(fmu, vr, 0.0, 0, n)
+        fmu.terminate()
+        fmu.freeInstance()
+    finally:
+        stop_node(node)
+    node = start_node(port, prefix, case="closed-tank2d.toml", ranks=2)
+    try:
+        fmu, vr = proxy_fmu(fmu_path, port, prefix)
+        rows, t = tank_rows(fmu, vr, 0.0, 0, n // 2)
+        state = fmu.getFMUState()
+        blob = fmu.serializeFMUState(state)
+        saved_t = t
+        more, t = tank_rows(fmu, vr, t, n // 2, n)
+        rows += more
+        a, b = np.array(rows), np.array(local)
+        scale = np.abs(b).max(axis=0)
+        scale[scale == 0] = 1.0  # (the 2D z force and x, y torques are 0 in both)
+        out["relative_to_local"] = float((np.abs(a - b) / scale).max())
+        out["identical_to_local"] = bool(np.array_equal(a, b))
+        out["same_as_one_rank"] = bool(np.array_equal(a, np.array(one)))
+        fmu.setFMUState(state)
+        replay, _ = tank_rows(fmu, vr, saved_t, n // 2, n)
+        out["replay_same"] = bool(np.array_equal(np.array(replay), a[n // 2:]))
+        # rank 1 killed while the node takes a long step: Open MPI ends the whole job, the
+        # step's request is left without a node, and the proxy says so
+        killer = threading.Timer(1.0, lambda: os.kill(rank_pid(prefix, 1), 9))
+        killer.start()
+        try:
+            fmu.doStep(t, 2.0)
+            out["after_kill"] = "accepted"
+        except FMICallException:
+            out["after_kill"] = LOG[-1][2]
+        killer.join()
+        node.wait(timeout=60)
+        out["node_exit"] = node.returncode
+        # a node started anew on 2 ranks, the saved state restored into it: the run resumes
+        node = start_node(port, prefix, case="closed-tank2d.toml", ranks=2)
+        fmu.setFMUState(fmu.deserializeFMUState(blob))
+        resumed, _ = tank_rows(fmu, vr, saved_t, n // 2, n)
+        out["resumed_same"] = bool(np.array_equal(np.array(resumed), a[n // 2:]))
+        fmu.terminate()
+        fmu.freeInstance()
+    finally:
+        stop_node(node)
     return out
 
 
