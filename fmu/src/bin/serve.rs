@@ -5,6 +5,13 @@
 //!
 //! Stepped from outside by default; `--run T --step H` steps itself to T (publishing every H,
 //! taking live inputs) and then keeps serving.
+//!
+//!   mpirun -n 4 sphfmu serve --case models/slosh2d.toml --prefix lab/tank
+//!
+//! serves one case shared among 4 ranks (`sphfmu::parallel`): rank 0 joins zenoh, and hands
+//! each request (and each step of `--run`) to the other ranks, which make the same instance
+//! calls in the same order, since most of them are collectives; rank 0 replies. Live zenoh
+//! inputs are ignored there (only rank 0 hears them; every rank must step with the same).
 
 use clap::Parser;
 use sphfmu::parallel::comm::Comm;
