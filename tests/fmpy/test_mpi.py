@@ -69,7 +69,8 @@ def _columns(path):
     # walls of a body: the hydrostatic closed tank, and its load history
     ("closed-tank2d.toml", ["time.t_end=0.05"], "bodies.csv"),
     # a body with two ports, driven hard enough that particles enter and leave within the run
-    ("channel-ports2d.toml", ["time.t_end=0.5", "region.0.spacing=0.1",
+    # (the first leaves through the outlet at t = 0.59)
+    ("channel-ports2d.toml", ["time.t_end=1.0", "region.0.spacing=0.1",
                               'port.0.pressure={ type = "constant", value = 3.0 }'], "ports.csv"),
 ])
 def test_walls_and_ports_are_the_same_on_1_and_2_ranks(sphfmu_bin, models, tmp_path, model, sets, loads):
