@@ -477,6 +477,17 @@ def proxy_rows(fmu, vr, t, k0, k1, h=0.02):
     return rows, t
 
 
+def checkpointed_run(fmu, vr, rows_of, n):
+    """Steps 0..n-1 by `rows_of` (as proxy_rows), the FMU state taken after step n/2: the
+    rows, the end time, the state, its serialized bytes and its time."""
+    rows, t = rows_of(fmu, vr, 0.0, 0, n // 2)
+    state = fmu.getFMUState()
+    blob = fmu.serializeFMUState(state)
+    saved_t = t
+    more, t = rows_of(fmu, vr, t, n // 2, n)
+    return rows + more, t, state, blob, saved_t
+
+
 def session_proxy_matches_local(fmu_path, port, prefix, n=60):
     """The FMU as a proxy of a node (issue 23): the same outputs as the local FMU, a rollback
     replayed bit for bit, a node killed mid-run an fmi3Error with a log line (this process
@@ -487,12 +498,7 @@ def session_proxy_matches_local(fmu_path, port, prefix, n=60):
     out = {}
     try:
         fmu, vr = proxy_fmu(fmu_path, port, prefix)
-        rows, t = proxy_rows(fmu, vr, 0.0, 0, n // 2)
-        state = fmu.getFMUState()
-        blob = fmu.serializeFMUState(state)
-        saved_t = t
-        more, t = proxy_rows(fmu, vr, t, n // 2, n)
-        rows += more
+        rows, t, state, blob, saved_t = checkpointed_run(fmu, vr, proxy_rows, n)
         out["max_difference"] = float(np.abs(np.array(rows) - local).max())
         out["identical"] = bool(np.array_equal(np.array(rows), local))
         # rollback: back to the middle, the second half again
@@ -572,12 +578,7 @@ def session_proxy_on_ranks(fmu_path, port, prefix, n=50):
     node = start_node(port, prefix, case="closed-tank2d.toml", ranks=2)
     try:
         fmu, vr = proxy_fmu(fmu_path, port, prefix)
-        rows, t = tank_rows(fmu, vr, 0.0, 0, n // 2)
-        state = fmu.getFMUState()
-        blob = fmu.serializeFMUState(state)
-        saved_t = t
-        more, t = tank_rows(fmu, vr, t, n // 2, n)
-        rows += more
+        rows, t, state, blob, saved_t = checkpointed_run(fmu, vr, tank_rows, n)
         a, b = np.array(rows), np.array(local)
         scale = np.abs(b).max(axis=0)
         scale[scale == 0] = 1.0  # (the 2D z force and x, y torques are 0 in both)
