@@ -19,5 +19,6 @@ pub mod runner;
 pub mod scheme;
 pub mod sim;
 pub mod system;
+pub mod threads;
 pub mod units;
 pub mod verify;

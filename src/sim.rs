@@ -198,6 +198,7 @@ impl<const D: usize> Simulation<D> {
         let c = &self.control;
         let mut dt = (0..self.sys.owned())
             .into_par_iter()
+            .with_min_len(crate::threads::LIGHT)
             .map(|a| {
                 let h = p.h[a];
                 let mut dt = f64::INFINITY;
@@ -260,13 +261,14 @@ impl<const D: usize> Simulation<D> {
         }
         // the integrator gives each evaluation its stage's time from the step's end time
         self.sys.time = self.time + dt;
-        self.integrator
-            .step(&mut self.sys, self.scheme.as_mut(), dt)
-            .map_err(|e| SolverError::Scheme {
+        let (integrator, sys, scheme) = (&mut self.integrator, &mut self.sys, &mut self.scheme);
+        crate::threads::with_partner_awake(|| integrator.step(sys, scheme.as_mut(), dt)).map_err(
+            |e| SolverError::Scheme {
                 message: e.0,
                 time: self.time,
                 step: self.steps,
-            })?;
+            },
+        )?;
         self.scheme.end_step(&mut self.sys, dt);
         self.time += dt;
         // walls land exactly on their body's pose (the integrator moved them approximately)

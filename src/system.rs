@@ -7,6 +7,7 @@ use crate::kernel::DimKernel;
 use crate::neighbours::{unpack, CellGrid, NeighbourList};
 use crate::parallel::exact::ExactSum;
 use crate::particles::{Particles, Vector};
+use crate::threads::{LIGHT, MEDIUM};
 use rayon::prelude::*;
 
 /// Counters of the latest evaluation (for benchmarks and diagnostics).
@@ -192,11 +193,13 @@ impl<const D: usize> System<D> {
             let pos = &self.particles.pos;
             let moved: Vec<Vector<D>> = (0..n)
                 .into_par_iter()
+                .with_min_len(LIGHT)
                 .map(|i| dom.separation(&pos[i], &v.pos[i], 0))
                 .collect();
             let inf = Vector::<D>::repeat(f64::INFINITY);
             let (lo, hi) = moved
                 .par_iter()
+                .with_min_len(LIGHT)
                 .map(|d| (*d, *d))
                 .reduce(|| (inf, -inf), |(a, b), (c, d)| (a.inf(&c), b.sup(&d)));
             // On a reflecting axis a mirror image moves with the normal component of d_b
@@ -208,13 +211,18 @@ impl<const D: usize> System<D> {
                     0.0
                 }
             });
-            disp = moved.par_iter().map(|d| (d - u).norm()).collect();
+            disp = moved
+                .par_iter()
+                .with_min_len(LIGHT)
+                .map(|d| (d - u).norm())
+                .collect();
             delta = disp.iter().cloned().fold(0.0, f64::max);
             let k = &self.kernel;
             let h = &self.particles.h;
             // Rebuild when some particle's current support already lacks slack.
             rebuild = (0..n)
                 .into_par_iter()
+                .with_min_len(LIGHT)
                 .any(|i| k.radius(h[i]) + disp[i] + delta > v.reach[i]);
         }
         if rebuild {
@@ -272,6 +280,7 @@ impl<const D: usize> System<D> {
         // What the cut reads of a neighbour, packed: one cache line instead of three.
         let kin: Vec<(Vector<D>, Vector<D>, f64)> = (0..p.len())
             .into_par_iter()
+            .with_min_len(LIGHT)
             .map(|i| (p.pos[i], p.vel[i], k.radius(p.h[i])))
             .collect();
         let list = sys.verlet.list.filtered_with(out, |a, acc, e| {
@@ -338,6 +347,7 @@ impl<const D: usize> System<D> {
         let d = D as f64;
         p.h.par_iter_mut()
             .zip(p.div_v.par_iter())
+            .with_min_len(LIGHT)
             .for_each(|(h, &dv)| {
                 let f = (dt * dv / d).clamp(-0.2, 0.2);
                 *h *= 1.0 + f;
@@ -472,6 +482,7 @@ impl<const D: usize> System<D> {
             .zip(p.dudt.par_iter_mut())
             .zip(p.v_sig.par_iter_mut())
             .enumerate()
+            .with_min_len(LIGHT)
             .for_each(|(a, ((acc, du), vs))| {
                 let (dv, dudt, vsig) = derivs(a);
                 *acc = dv + crate::boundary::frame::body_force_in(frame, &g, &pos[a], &vel[a]);
@@ -503,6 +514,7 @@ impl<const D: usize> System<D> {
             .zip(p.sound_speed.par_iter_mut())
             .zip(p.rho.par_iter().zip(p.u.par_iter()))
             .zip(p.material.par_iter())
+            .with_min_len(MEDIUM)
             .for_each(|(((pr, cs), (&rho, &u)), &m)| {
                 let eos = crate::eos::of_material(&eos, table, m);
                 *pr = eos.pressure(rho, u);

@@ -108,6 +108,7 @@ impl<const D: usize> System<D> {
             .par_iter_mut()
             .zip(p.vel.par_iter_mut())
             .zip(p.body.par_iter().zip(p.rest.par_iter()))
+            .with_min_len(crate::threads::LIGHT)
             .for_each(|((x, v), (&b, rest))| {
                 if b > 0 {
                     let (xn, vn, _) = bodies[b as usize - 1].point(rest);

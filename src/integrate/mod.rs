@@ -17,6 +17,7 @@
 use crate::particles::Vector;
 use crate::scheme::{compatible, Scheme, SchemeError};
 use crate::system::System;
+use crate::threads::{LIGHT, MEDIUM};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -75,6 +76,7 @@ impl<const D: usize> Saved<D> {
         let p = &sys.particles;
         self.entropy = (0..p.len())
             .into_par_iter()
+            .with_min_len(MEDIUM)
             .map(|i| sys.eos_of(p.material[i]).entropy_proxy(p.rho[i], p.u[i]))
             .collect();
     }
@@ -123,6 +125,7 @@ fn combine<const D: usize>(sys: &mut System<D>, s0: &Saved<D>, c0: f64, c1: f64,
         .zip(p.vel.par_iter_mut())
         .zip(p.u.par_iter_mut())
         .enumerate()
+        .with_min_len(LIGHT)
         .for_each(|(i, ((x, v), u))| {
             let xn = *x + *v * dt;
             let vn = *v + acc[i] * dt;
@@ -146,16 +149,22 @@ fn combine_canonical<const D: usize>(
 ) {
     let p = &mut sys.particles;
     let (acc, dedt, vel) = (&p.acc, &p.dudt, &p.vel);
-    p.pos.par_iter_mut().enumerate().for_each(|(i, x)| {
-        *x = s0.pos[i] * c0 + (*x + vel[i] * dt) * c1;
-    });
+    p.pos
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(LIGHT)
+        .for_each(|(i, x)| {
+            *x = s0.pos[i] * c0 + (*x + vel[i] * dt) * c1;
+        });
     p.extra_vectors[sr.momentum]
         .par_iter_mut()
         .enumerate()
+        .with_min_len(LIGHT)
         .for_each(|(i, s)| *s = s0.momentum[i] * c0 + (*s + acc[i] * dt) * c1);
     p.extra_scalars[sr.energy]
         .par_iter_mut()
         .enumerate()
+        .with_min_len(LIGHT)
         .for_each(|(i, e)| *e = s0.energy[i] * c0 + (*e + dedt[i] * dt) * c1);
 }
 
@@ -169,6 +178,7 @@ fn combine_density<const D: usize>(sys: &mut System<D>, s0: &[f64], c0: f64, c1:
         .par_iter_mut()
         .zip(p.drhodt.par_iter())
         .enumerate()
+        .with_min_len(LIGHT)
         .for_each(|(i, (r, d))| *r = s0[i] * c0 + (*r + d * dt) * c1);
 }
 
@@ -182,6 +192,7 @@ fn kick_density<const D: usize>(sys: &mut System<D>, from: &[f64], dt: f64) {
         .par_iter_mut()
         .zip(p.drhodt.par_iter())
         .enumerate()
+        .with_min_len(LIGHT)
         .for_each(|(i, (r, d))| *r = from[i] + d * dt);
 }
 
@@ -202,6 +213,7 @@ fn enforce_boundaries<const D: usize>(sys: &mut System<D>) {
             .pos
             .par_iter_mut()
             .zip(p.vel.par_iter_mut())
+            .with_min_len(LIGHT)
             .for_each(|(x, v)| dom.enforce(x, v)),
         Some(sr) => p
             .pos
@@ -209,6 +221,7 @@ fn enforce_boundaries<const D: usize>(sys: &mut System<D>) {
             .zip(p.extra_vectors[sr.momentum].par_iter_mut())
             // S decides the direction; v is the previous stage's until the next evaluation
             // recovers it from S
+            .with_min_len(LIGHT)
             .for_each(|(x, s)| dom.enforce(x, s)),
     }
 }
@@ -260,6 +273,7 @@ impl<const D: usize> Integrator<D> {
                         .zip(p.u.par_iter_mut())
                         .zip(sv.par_iter_mut().zip(su.par_iter_mut()))
                         .zip(p.acc.par_iter().zip(p.dudt.par_iter()))
+                        .with_min_len(LIGHT)
                         .for_each(|((((x, v), u), (vh, uh)), (a, du))| {
                             *vh = *v + *a * half;
                             *uh = *u + *du * half;
@@ -277,6 +291,7 @@ impl<const D: usize> Integrator<D> {
                         .par_iter_mut()
                         .zip(p.vel.par_iter_mut())
                         .zip(self.saved.vel.par_iter_mut())
+                        .with_min_len(LIGHT)
                         .for_each(|((x, v), vh)| {
                             let before = *v;
                             dom.enforce(x, v);
@@ -301,6 +316,7 @@ impl<const D: usize> Integrator<D> {
                     .par_iter_mut()
                     .zip(p.u.par_iter_mut())
                     .enumerate()
+                    .with_min_len(LIGHT)
                     .for_each(|(i, (v, u))| {
                         *v = sv[i] + p.acc[i] * half;
                         *u = su[i] + p.dudt[i] * half;
@@ -360,6 +376,7 @@ impl<const D: usize> Integrator<D> {
                         .zip(p.vel.par_iter_mut())
                         .zip(p.u.par_iter_mut())
                         .enumerate()
+                        .with_min_len(LIGHT)
                         .for_each(|(i, ((x, v), u))| {
                             *x = s0.pos[i] + vmid[i] * dt;
                             *v = s0.vel[i] + acc[i] * dt;
@@ -380,6 +397,7 @@ impl<const D: usize> Integrator<D> {
                     let p = &sys.particles;
                     let v_half: Vec<Vector<D>> = (0..p.len())
                         .into_par_iter()
+                        .with_min_len(LIGHT)
                         .map(|i| (s0.vel[i] + p.vel[i]) * 0.5)
                         .collect();
                     let u1 = compatible::thermal_update(sys, work, &v_half, &s0.entropy, &s0.u, dt);

@@ -15,6 +15,7 @@
 use super::{smoothing, Scheme, SchemeError};
 use crate::particles::Vector;
 use crate::system::{Pair, System};
+use crate::threads::LIGHT;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -303,6 +304,7 @@ fn cut_lists_with_gradient_sums<const D: usize>(sys: &mut System<D>) -> Vec<Grad
         .particles
         .h
         .par_iter()
+        .with_min_len(LIGHT)
         .map(|&h| GradAcc::new(h))
         .collect();
     sys.compact_neighbours_visiting(&mut grads, add_gradient_pair);
@@ -339,6 +341,7 @@ fn finish_gradients<const D: usize>(
         .zip(p.curl_v.par_iter_mut())
         .zip(p.extra_scalars[balsara_slot].par_iter_mut())
         .enumerate()
+        .with_min_len(LIGHT)
         .for_each(|(a, ((dv, cv), bal))| {
             let s = -1.0 / (omega[a] * rho[a]);
             let div = s * grads[a].div;
@@ -389,6 +392,7 @@ pub(crate) fn force_pass<const D: usize>(
     // P/(Ω ρ²) per particle, computed once rather than per pair.
     let pterm_std: Vec<f64> = (0..n)
         .into_par_iter()
+        .with_min_len(LIGHT)
         .map(|a| p.pressure[a] / (p.omega[a] * p.rho[a] * p.rho[a]))
         .collect();
     // Which particles use the standard form (all for GradH; with rpSPH's shock switch those
@@ -397,6 +401,7 @@ pub(crate) fn force_pass<const D: usize>(
         PressureForm::GradH => vec![true; n],
         PressureForm::Relative { shock_switch, .. } => (0..n)
             .into_par_iter()
+            .with_min_len(LIGHT)
             .map(|a| shock_switch && -p.h[a] * p.div_v[a] > 3.0 * p.sound_speed[a])
             .collect(),
     };
@@ -409,6 +414,7 @@ pub(crate) fn force_pass<const D: usize>(
         let bodies = &sys.bodies;
         (0..n)
             .into_par_iter()
+            .with_min_len(LIGHT)
             .map(|a| ForceRecord {
                 x: p.pos[a],
                 v: p.vel[a],
