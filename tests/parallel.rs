@@ -176,14 +176,8 @@ fn crksph_conserves_on_3_ranks_as_on_1() {
     assert!(p3 < 1e-12 && p1 < 1e-12, "momentum drift {p1:e} / {p3:e}");
 }
 
-/// Whether `a` and `b` agree to `tol` relative to the largest of them in size.
-fn close(a: &[f64], b: &[f64], tol: f64) -> bool {
-    let scale = a.iter().chain(b).fold(0.0_f64, |m, x| m.max(x.abs()));
-    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol * scale)
-}
-
-/// A case on 1, 2 and 3 ranks, `steps` steps: the particles and the bodies' loads equal to
-/// the bit, the ports' flows (sums of per-rank sums) to 1e-12.
+/// A case on 1, 2 and 3 ranks, `steps` steps: the particles, the bodies' loads and the
+/// ports' flows equal to the bit.
 /// A halo of the skin alone must change the particles on 2 ranks, or the comparison could
 /// not fail.
 fn boundary_case_same_on_1_2_3_ranks<const D: usize>(text: &str, steps: usize) -> Outcome<D> {
@@ -199,14 +193,9 @@ fn boundary_case_same_on_1_2_3_ranks<const D: usize>(text: &str, steps: usize) -
         if let Some(d) = first_difference(&one.particles, &many.particles) {
             panic!("1 rank against {ranks}: {d}");
         }
-        // the loads are exact sums (`parallel::exact`): the same bits
+        // the loads and the port flows are exact sums (`parallel::exact`): the same bits
         assert_eq!(one.loads, many.loads, "body loads on 1 rank and on {ranks}");
-        for (a, b) in one.flows.iter().zip(&many.flows) {
-            assert!(
-                close(a, b, 1e-12),
-                "port flows {a:?} on 1 rank, {b:?} on {ranks}"
-            );
-        }
+        assert_eq!(one.flows, many.flows, "port flows on 1 rank and on {ranks}");
     }
     one
 }

@@ -434,7 +434,9 @@ impl<const D: usize> System<D> {
         let mut keep: Vec<u32> = Vec::with_capacity(n + 16);
         let mut copies: Vec<(u32, usize)> = Vec::new();
         let mut deleted = false;
-        let mut flow = vec![[0.0; 2]; self.ports.len()];
+        // mass in and out per port, summed exactly and merged over a distributed run's ranks
+        // (`parallel::exact`), so the counters are the same bits on any number of ranks
+        let mut sums = crate::parallel::exact::registers(2 * self.ports.len());
         for i in 0..n {
             let p = &mut self.particles;
             if p.body[i] != 0 {
@@ -447,7 +449,7 @@ impl<const D: usize> System<D> {
                 let (d, _) = port.split(&p.pos[i]);
                 if d > 0.0 {
                     p.port[i] = 0;
-                    flow[k][0] += p.mass[i];
+                    sums[2 * k].add(p.mass[i]);
                     copies.push((i as u32, k));
                 } else if d < -port.depth {
                     deleted = true;
@@ -460,12 +462,19 @@ impl<const D: usize> System<D> {
                 let (d, t) = port.split(&p.pos[i]);
                 if d <= 0.0 && d >= -port.depth && port.opening.contains(&t) {
                     p.port[i] = k as u16 + 1;
-                    flow[k][1] += p.mass[i];
+                    sums[2 * k + 1].add(p.mass[i]);
                     break;
                 }
             }
             keep.push(i as u32);
         }
+        if let Some(ranks) = &self.ranks {
+            ranks.merge_in_place(&mut sums);
+        }
+        let flow = sums
+            .chunks_exact(2)
+            .map(|s| [s[0].value(), s[1].value()])
+            .collect();
         let changed = deleted || !copies.is_empty();
         PortCrossings {
             keep,
@@ -507,6 +516,7 @@ pub struct PortCrossings {
     pub copies: Vec<(u32, usize)>,
     /// Particles were created or deleted.
     pub changed: bool,
-    /// Mass that entered and left the fluid through each port.
+    /// Mass that entered and left the fluid through each port, over every rank of a
+    /// distributed run.
     pub flow: Vec<[f64; 2]>,
 }

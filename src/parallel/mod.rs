@@ -7,8 +7,9 @@
 //! ranks: neighbour rows are summed in the order of the particles' stable ids
 //! (`System::canonical_order`), the h solve's result does not depend on the neighbour list's
 //! history, the halo is deep enough for every pass (see `halo`), and the time step is a
-//! global minimum. Totals (diagnostics) are sums of per-rank sums, in rank order: equal to
-//! round-off, not to the bit, across rank counts.
+//! global minimum. Body loads, probes, patches and port flows are exact sums (`exact`): the
+//! same bits on any number of ranks. Totals of the diagnostics (energies, momenta) are sums
+//! of per-rank sums in rank order: equal to round-off, not to the bit, across rank counts.
 
 pub mod comm;
 pub mod exact;
@@ -359,9 +360,8 @@ impl<const D: usize> Layout<D> for Decomposition<D> {
         let own = sys.owned();
         let crossings = sys.cross_ports(own);
         let comm = self.comm();
-        let mut flow: Vec<f64> = crossings.flow.iter().flatten().copied().collect();
-        flow = comm.sum(&flow).map_err(|e| e.to_string())?;
-        for (port, f) in sys.ports.iter_mut().zip(flow.chunks_exact(2)) {
+        // the flows are already summed over the ranks, exactly (`System::cross_ports`)
+        for (port, f) in sys.ports.iter_mut().zip(&crossings.flow) {
             port.mass_in += f[0];
             port.mass_out += f[1];
         }
