@@ -101,8 +101,15 @@ pub struct Drive<const D: usize> {
     pressure: TimeFormula,
 }
 
-/// Position, velocity and specific energy of a driven particle at rest position x0, time t.
-type DrivenState<const D: usize> = (Vector<D>, Vector<D>, f64);
+/// A driven particle's state at rest position x0, time t.
+struct DrivenState<const D: usize> {
+    x: Vector<D>,
+    v: Vector<D>,
+    /// Specific internal energy from the EOS, u(ρ, P).
+    u: f64,
+    /// The imposed density (rest-frame n in special-relativistic runs).
+    rho: f64,
+}
 
 impl<const D: usize> Drive<D> {
     fn state(&self, x0: &Vector<D>, t: f64, eos: &dyn Eos) -> Result<DrivenState<D>, String> {
@@ -119,13 +126,18 @@ impl<const D: usize> Drive<D> {
                 "drive density is {rho} (must be > 0) at x = {x0:?}, t = {t}"
             ));
         }
-        Ok((x, v, eos.internal_energy(rho, p)))
+        let u = eos.internal_energy(rho, p);
+        Ok(DrivenState { x, v, u, rho })
     }
 }
 
 impl<const D: usize> System<D> {
     /// Set every driven particle to its region's solution at `self.time` (the time of the
-    /// state the next evaluation sees).
+    /// state the next evaluation sees). In a special-relativistic run the evolved variables
+    /// are the canonical S and ε (Rosswog (2015) Eqs. 54, 57), so they are set too, from the
+    /// imposed rest-frame n, P and v: S = γE v, ε = γE − P/(γn). The next evaluation
+    /// recovers v, u and P from them with its own summed N, as it does for every particle
+    /// (the density stays the scheme's, as in the Newtonian case above).
     pub fn apply_drives(&mut self) -> Result<(), String> {
         if self.drives.is_empty() {
             return Ok(());
@@ -138,10 +150,28 @@ impl<const D: usize> System<D> {
                 continue;
             }
             let eos = crate::eos::of_material(&self.eos, &self.material_eos, p.material[i]);
-            let (x, v, u) = self.drives[k as usize - 1].state(&p.rest[i], t, &eos)?;
-            p.pos[i] = x;
-            p.vel[i] = v;
-            p.u[i] = u;
+            let s = self.drives[k as usize - 1].state(&p.rest[i], t, &eos)?;
+            if let (Some(sr), crate::eos::EosConfig::IdealGas { gamma }) = (self.relativistic, eos)
+            {
+                let c = crate::scheme::rosswog::sr::recovery::conserved(
+                    gamma,
+                    s.rho,
+                    s.u,
+                    s.v.norm_squared(),
+                );
+                if !c.lorentz.is_finite() {
+                    return Err(format!(
+                        "drive velocity |v| = {} at x = {:?}, t = {t}: must be < 1 (c = 1)",
+                        s.v.norm(),
+                        p.rest[i].as_slice()
+                    ));
+                }
+                p.extra_vectors[sr.momentum][i] = s.v * c.s_over_v;
+                p.extra_scalars[sr.energy][i] = c.eps;
+            }
+            p.pos[i] = s.x;
+            p.vel[i] = s.v;
+            p.u[i] = s.u;
         }
         Ok(())
     }

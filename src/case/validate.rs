@@ -367,8 +367,8 @@ impl Case {
     /// constant (PSPH's γ, Rosswog's pressure offset for X = P^k) need it shared.
     /// What the special-relativistic presets (c = 1, Rosswog (2015) Sec. 6) can run: an ideal
     /// gas (Eq. 62) in a box, stepped by SSP-RK3, with rest-frame states n > 0, P > 0 and
-    /// |v| < 1. Bodies, ports, drives, materials, gravity and moving frames have no SR form
-    /// here.
+    /// |v| < 1. Bodies, ports, materials, gravity and moving frames have no SR form here
+    /// (driven regions do: `boundary::drive` sets S and ε).
     fn validate_relativistic(&self) -> Result<(), CaseError> {
         let name = "the rosswog-sr presets";
         if !matches!(self.eos, EosConfig::IdealGas { .. }) {
@@ -400,7 +400,6 @@ impl Case {
             )));
         }
         for (i, r) in self.regions.iter().enumerate() {
-            refuse(&format!("region[{i}].drive"), r.drive.is_some())?;
             refuse(&format!("region[{i}].gresho"), r.gresho.is_some())?;
             refuse(&format!("region[{i}].hydrostatic"), r.hydrostatic)?;
             if let Some(v) = &r.velocity {
