@@ -408,6 +408,21 @@ def sixfold_imprint(run, args) -> float:
 
 
 @metric
+def bubble_vy_rms(run, args) -> float:
+    """The r.m.s. transverse velocity v_y at t_end of the gas that started inside the circle
+    ``center``, ``radius`` (the bubble of Rosswog's blast–bubble tests, §7.8.1–2): the rolling
+    in ("curling") of the shocked bubble's lobes is transverse motion, which a more
+    dissipative scheme damps."""
+    first = read_csv(snapshots(run.dir)[0][1])
+    cx, cy = args["center"]
+    inside = (first["x"] - cx) ** 2 + (first["y"] - cy) ** 2 < args["radius"] ** 2
+    ids = set(first["id"][inside].astype(int).tolist())
+    s = last_snapshot(run.dir)
+    mine = np.array([int(i) in ids for i in s["id"]])
+    return float(np.sqrt(np.mean(s["vy"][mine] ** 2)))
+
+
+@metric
 def trigger_level(run, args) -> float:
     """A column of triggers.csv (Rosswog's dissipation triggers after each step: ``column``,
     e.g. "max K_noise1") reduced over time by ``stat``: "max", "first" or "last"."""

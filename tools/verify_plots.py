@@ -329,3 +329,25 @@ def triple_point(claim: dict, runs: list, png: Path) -> None:
     for ax in axes[len(best):]:
         ax.set_visible(False)
     finish(plt, fig, claim, png, "triple point at t = 5 (x, y in m; log10 ρ in kg/m²)")
+
+
+@plot
+def blast_bubble(claim: dict, runs: list, png: Path) -> None:
+    """Rosswog (2015) Figs. 27–30: the judged scheme's density N at every snapshot (left
+    column, the paper's times), and every scheme's at t_end (right column)."""
+    from verify_metrics import read_csv, snapshots
+
+    best = finest(runs)
+    judged = claim_scheme(claim) or next(iter(best))
+    times = snapshots(best[judged][1].dir)[1:]
+    rows = max(len(times), len(best))
+    plt, fig, axes = figure(2, rows, size=(6.4, 2.1))
+    for k, (t, path) in enumerate(times):
+        density_map(axes[2 * k], read_csv(path), f"{judged}: N at t = {t:g}")
+    for k, (scheme, (res, run, _)) in enumerate(best.items()):
+        density_map(axes[2 * k + 1], last_snapshot(run.dir), f"{scheme}: N at t_end")
+    for k in range(len(times), rows):
+        axes[2 * k].set_visible(False)
+    for k in range(len(best), rows):
+        axes[2 * k + 1].set_visible(False)
+    finish(plt, fig, claim, png, "relativistic blast–bubble: density N (computing frame)")
