@@ -262,13 +262,20 @@ impl<const D: usize> Simulation<D> {
         // the integrator gives each evaluation its stage's time from the step's end time
         self.sys.time = self.time + dt;
         let (integrator, sys, scheme) = (&mut self.integrator, &mut self.sys, &mut self.scheme);
-        crate::threads::with_partner_awake(|| integrator.step(sys, scheme.as_mut(), dt)).map_err(
-            |e| SolverError::Scheme {
-                message: e.0,
-                time: self.time,
-                step: self.steps,
-            },
-        )?;
+        let mut step = || integrator.step(sys, scheme.as_mut(), dt);
+        // A distributed run's ranks may share cores (mpirun --oversubscribe, or a pool of
+        // one thread per core in each rank): a spinning partner would take CPU from another
+        // rank, so only a single process keeps its partner thread awake.
+        let result = if self.layout.is_none() {
+            crate::threads::with_partner_awake(step)
+        } else {
+            step()
+        };
+        result.map_err(|e| SolverError::Scheme {
+            message: e.0,
+            time: self.time,
+            step: self.steps,
+        })?;
         self.scheme.end_step(&mut self.sys, dt);
         self.time += dt;
         // walls land exactly on their body's pose (the integrator moved them approximately)
