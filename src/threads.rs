@@ -1,21 +1,23 @@
 //! How a loop over the particles splits across the instance's rayon pool.
 //!
 //! Rayon splits an indexed loop down to single elements when threads are idle. For a few
-//! arithmetic operations per particle that hands out tasks of a few nanoseconds, and on a
-//! small case (the 1,566-particle closed tank, about 1 ms a step) a sleeping worker's wake-up
-//! (a futex, tens of microseconds) costs more than the loop: the second thread slowed such
-//! loops down. A minimum length keeps a small loop on the calling thread and still gives a
-//! 1e6-particle loop hundreds of tasks. Pair loops (tens of neighbours per particle) split
-//! finer (see `System::gather_with`). Results never depend on these: every element is
-//! written by itself, and reductions that could depend on the split are taken in a fixed order.
+//! arithmetic operations per particle that hands out tasks of a few nanoseconds, each handed
+//! over to (and perhaps waking) another worker. A minimum length keeps a small loop on the
+//! calling thread and still gives a 1e6-particle loop hundreds of tasks. Pair loops (tens of
+//! neighbours per particle) split finer (see `System::gather_with`). Measured on the closed
+//! tank (`sphfmu run models/closed-tank2d.toml --threads 2`, BENCHMARKS.md): on its own this
+//! left the wall time as it was (5.80 s both ways); what the second thread lost there was its
+//! wake-ups, see [`with_partner_awake`]. Results never depend on these lengths: every element
+//! is written by itself, and the reductions split this way (min, max, any) do not depend on
+//! the order of their terms.
 
 /// Minimum elements per task for an elementwise update of a few arithmetic operations
-/// (integrator stages, h prediction, packing a particle's record). Measured on the closed
-/// tank (`sphfmu run models/closed-tank2d.toml --threads 2`); see BENCHMARKS.md.
+/// (integrator stages, h prediction, packing a particle's record).
 pub const LIGHT: usize = 4096;
 
 /// Minimum elements per task for an elementwise loop with a transcendental function per
-/// element (an equation of state's `powf`, an entropy): about ten times a light element.
+/// element (an equation of state's `powf`, an entropy): an estimate of ten times a light
+/// element's cost, not a measurement.
 pub const MEDIUM: usize = 512;
 
 thread_local! {
@@ -30,10 +32,10 @@ thread_local! {
 /// and the next parallel loop has to wake it. A step has several serial stretches (the
 /// integrator's light loops, the list's join, the checks), so on small cases the second
 /// thread slept and woke about five times a step (76,000 context switches in the
-/// closed tank's 7,728 steps), and on a virtual machine each wake-up costs tens of
-/// microseconds or more. Spinning costs the second core nothing it would otherwise use
-/// during a step, and it yields to the OS between polls so an oversubscribed machine (ranks
-/// sharing cores) still schedules other processes.
+/// closed tank's 7,728 steps). Kept awake, it made 22,000 and the run took 5.3 s instead of
+/// 5.8 s (BENCHMARKS.md). Spinning costs the second core nothing it would otherwise use
+/// during a step, and it yields to the OS between polls. `Simulation` does not use it in a
+/// distributed run, whose ranks may share cores.
 ///
 /// Only for a pool of exactly two threads: there the spinner is the oldest job in the
 /// calling thread's deque, so the other worker's first steal is the spinner itself and it

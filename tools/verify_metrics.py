@@ -416,9 +416,8 @@ def bubble_vy_rms(run, args) -> float:
     first = read_csv(snapshots(run.dir)[0][1])
     cx, cy = args["center"]
     inside = (first["x"] - cx) ** 2 + (first["y"] - cy) ** 2 < args["radius"] ** 2
-    ids = set(first["id"][inside].astype(int).tolist())
     s = last_snapshot(run.dir)
-    mine = np.array([int(i) in ids for i in s["id"]])
+    mine = np.isin(s["id"], first["id"][inside])
     return float(np.sqrt(np.mean(s["vy"][mine] ** 2)))
 
 
