@@ -211,15 +211,34 @@ pub struct KernelEval {
     pub dwdh: f64,
 }
 
-/// A kernel bound to a dimension, with σ precomputed.
+/// A kernel bound to a dimension, with σ precomputed. `K` is the runtime-chosen
+/// [`AnyKernel`] everywhere but in the hottest pair loops, which take the concrete kernel
+/// through [`DimKernel::visit`].
 #[derive(Debug, Clone, Copy)]
-pub struct DimKernel<const D: usize> {
-    pub kernel: AnyKernel,
+pub struct DimKernel<const D: usize, K = AnyKernel> {
+    pub kernel: K,
     sigma: f64,
 }
 
+/// A pair loop compiled once per concrete kernel (see [`DimKernel::visit`]).
+pub trait KernelVisitor<const D: usize> {
+    type Output;
+    fn visit<K: Kernel + Copy>(self, kernel: &DimKernel<D, K>) -> Self::Output;
+}
+
 impl<const D: usize> DimKernel<D> {
-    pub fn new(kernel: AnyKernel) -> Self {
+    /// Run `v` with the concrete kernel type, so the shape inlines into the loop with no
+    /// match per pair. The enum's match is perfectly predicted, but it keeps the compiler from
+    /// scheduling the kernel's arithmetic with the loop's; on the standard force pass this was
+    /// worth BENCH_FORCE (issue 19, BENCHMARKS.md).
+    pub fn visit<V: KernelVisitor<D>>(&self, v: V) -> V::Output {
+        let (sigma, kernel) = (self.sigma, &self.kernel);
+        dispatch!(kernel, k => v.visit(&DimKernel::<D, _> { kernel: *k, sigma }))
+    }
+}
+
+impl<const D: usize, K: Kernel + Copy> DimKernel<D, K> {
+    pub fn new(kernel: K) -> Self {
         Self {
             kernel,
             sigma: kernel.sigma(D),

@@ -5,6 +5,7 @@
 //! with the image code (high 5 bits: mirror ghosts of reflecting walls).
 
 mod grid;
+pub mod lanes;
 
 pub use grid::CellGrid;
 

@@ -4,9 +4,10 @@
 //! Ω_a = 1 + h_a/(D κ_a) Σ_b X_b ∂W_ab(h_a)/∂h_a (Eq. 51). X = m (the default) is standard
 //! SPH's summation density ρ_a = Σ_b m_b W_ab(h_a).
 
+use crate::kernel::{DimKernel, Kernel, KernelVisitor};
+use crate::neighbours::lanes::{for_each_row, RowPass};
 use crate::neighbours::unpack;
 use crate::system::System;
-use rayon::prelude::*;
 
 /// Relative density tolerance of the h iteration (foundation issue; Rosswog §7.2).
 pub const DENSITY_TOLERANCE: f64 = 1e-4;
@@ -16,6 +17,7 @@ const MAX_NEWTON: usize = 50;
 const MAX_ROUNDS: usize = 12;
 
 /// Result of the h solve for one particle.
+#[derive(Default)]
 struct HSolve {
     h: f64,
     rho: f64,
@@ -56,15 +58,13 @@ pub fn solve_density_and_h_weighted<const D: usize>(
         let t0 = std::time::Instant::now();
         let results: Vec<HSolve> = {
             let s = &*sys;
-            let x = weights.unwrap_or(&s.particles.mass);
-            pending
-                .par_iter()
-                .with_min_len(64)
-                .map(|&a| {
-                    let a = a as usize;
-                    solve_one(s, x, a, start_h[a], h_allowed[a])
-                })
-                .collect()
+            s.kernel.visit(SolvePass {
+                sys: s,
+                x: weights.unwrap_or(&s.particles.mass),
+                pending: &pending,
+                start_h: &start_h,
+                h_allowed: &h_allowed,
+            })
         };
         sys.stats.seconds_density += t0.elapsed().as_secs_f64();
         rounds += 1;
@@ -120,49 +120,181 @@ pub fn update_master_list<const D: usize>(sys: &mut System<D>) {
     }
 }
 
-/// κ(h) = Σ X_b W_ab(h) and ∂κ/∂h over a's listed neighbours (+ self).
-///
-/// Written for the pair loop's cost (this is most of the h–ρ solve): with W = σ/h^D w(q) and
-/// ∂W/∂h = −σ/h^{D+1} [D w + q w'], the factors σ/h^D and 1/h are the same for every
-/// neighbour, so the loop sums only X_b w(q_b) and X_b [D w + q w'](q_b) with q = r·(1/h) (a
-/// multiply, not a division), and skips the listed entries beyond the support (the skin
-/// and the scatter neighbours) before taking a square root.
-#[inline]
-fn kappa_at<const D: usize>(sys: &System<D>, x: &[f64], a: usize, h: f64) -> (f64, f64) {
-    use crate::kernel::Kernel;
-    let p = &sys.particles;
-    let k = &sys.kernel;
-    let hinv = 1.0 / h;
-    let support2 = (crate::kernel::SUPPORT * h) * (crate::kernel::SUPPORT * h);
-    let dim = D as f64;
-    let (w0, _) = k.kernel.shape(0.0);
-    let mut sum_w = x[a] * w0;
-    let mut sum_h = x[a] * dim * w0;
-    let xa = p.pos[a];
-    for &e in sys.verlet.list.of(a) {
-        let (b, code) = unpack(e);
-        let r2 = sys.domain.separation(&xa, &p.pos[b], code).norm_squared();
-        if r2 < support2 {
-            let q = r2.sqrt() * hinv;
-            let (w, dw) = k.kernel.shape(q);
-            sum_w += x[b] * w;
-            sum_h += x[b] * (dim * w + q * dw);
-        }
+/// The h solves of one round (the particles in `pending`), handed the concrete kernel.
+struct SolvePass<'a, const D: usize> {
+    sys: &'a System<D>,
+    x: &'a [f64],
+    pending: &'a [u32],
+    start_h: &'a [f64],
+    h_allowed: &'a [f64],
+}
+
+impl<const D: usize> KernelVisitor<D> for SolvePass<'_, D> {
+    type Output = Vec<HSolve>;
+    fn visit<K: Kernel + Copy>(self, kernel: &DimKernel<D, K>) -> Vec<HSolve> {
+        let mut out: Vec<HSolve> = self.pending.iter().map(|_| HSolve::default()).collect();
+        for_each_row(&SolveRows { v: &self, kernel }, &mut out);
+        out
     }
-    let norm = k.norm(hinv);
-    (norm * sum_w, -norm * hinv * sum_h)
+}
+
+struct SolveRows<'a, const D: usize, K> {
+    v: &'a SolvePass<'a, D>,
+    kernel: &'a DimKernel<D, K>,
+}
+
+impl<const D: usize, K: Kernel + Copy> RowPass for SolveRows<'_, D, K> {
+    type Acc = HSolve;
+    type Scratch = KappaLanes;
+
+    #[inline(always)]
+    fn row(&self, i: usize, out: &mut HSolve, lanes: &mut KappaLanes) {
+        let v = self.v;
+        let a = v.pending[i] as usize;
+        lanes.fill(v.sys, v.x, a);
+        let xa = v.x[a];
+        let kappa = KappaOf {
+            lanes,
+            kernel: *self.kernel,
+            xa,
+        };
+        *out = solve_one(v.sys, xa, a, v.start_h[a], v.h_allowed[a], kappa);
+    }
+}
+
+/// κ(h) and ∂κ/∂h of one particle (a trait, not a closure: a closure is compiled on its own,
+/// without the AVX2 of the pass that calls it).
+trait KappaAt {
+    fn at(&mut self, h: f64) -> (f64, f64);
+}
+
+struct KappaOf<'a, const D: usize, K> {
+    lanes: &'a mut KappaLanes,
+    kernel: DimKernel<D, K>,
+    xa: f64,
+}
+
+impl<const D: usize, K: Kernel + Copy> KappaAt for KappaOf<'_, D, K> {
+    #[inline(always)]
+    fn at(&mut self, h: f64) -> (f64, f64) {
+        self.lanes.kappa(&self.kernel, self.xa, h)
+    }
+}
+
+/// One particle's listed neighbours as lanes for κ(h): r², r and X_b, read once per solve
+/// (the Newton iterations, 1.8 a particle on the benchmark box, then only evaluate the
+/// kernel), and the per-pair terms.
+#[derive(Default)]
+struct KappaLanes {
+    r2: Vec<f64>,
+    r: Vec<f64>,
+    x: Vec<f64>,
+    tw: Vec<f64>,
+    th: Vec<f64>,
+}
+
+impl KappaLanes {
+    #[inline(always)]
+    fn fill<const D: usize>(&mut self, sys: &System<D>, x: &[f64], a: usize) {
+        let p = &sys.particles;
+        let xa = p.pos[a];
+        let row = sys.verlet.list.of(a);
+        for v in [&mut self.r2, &mut self.r, &mut self.x] {
+            v.clear();
+        }
+        for &e in row {
+            let (b, code) = unpack(e);
+            let r2 = sys.domain.separation(&xa, &p.pos[b], code).norm_squared();
+            self.r2.push(r2);
+            self.r.push(r2.sqrt());
+            self.x.push(x[b]);
+        }
+        self.tw.resize(row.len(), 0.0);
+        self.th.resize(row.len(), 0.0);
+    }
+
+    /// κ(h) = Σ X_b W_ab(h) and ∂κ/∂h over a's listed neighbours (+ self).
+    ///
+    /// Written for the pair loop's cost (this is most of the h–ρ solve): with W = σ/h^D w(q)
+    /// and ∂W/∂h = −σ/h^{D+1} [D w + q w'], the factors σ/h^D and 1/h are the same for every
+    /// neighbour, so the lanes hold only X_b w(q_b) and X_b [D w + q w'](q_b) with q = r·(1/h)
+    /// (a multiply, not a division). Entries beyond the support (the skin and the scatter
+    /// neighbours) give exact zeros, and the sum runs in list order, so κ is the same to the
+    /// bit as a loop that skips them, whatever the list's skin.
+    #[inline(always)]
+    fn kappa<const D: usize, K: Kernel + Copy>(
+        &mut self,
+        k: &DimKernel<D, K>,
+        xa: f64,
+        h: f64,
+    ) -> (f64, f64) {
+        let hinv = 1.0 / h;
+        let support2 = (crate::kernel::SUPPORT * h) * (crate::kernel::SUPPORT * h);
+        let (w0, _) = k.kernel.shape(0.0);
+        let dim = D as f64;
+        kappa_terms(
+            &k.kernel,
+            dim,
+            hinv,
+            support2,
+            &self.r2,
+            &self.r,
+            &self.x,
+            &mut self.tw,
+            &mut self.th,
+        );
+        let mut sum_w = xa * w0;
+        let mut sum_h = xa * dim * w0;
+        for (tw, th) in self.tw.iter().zip(&self.th) {
+            sum_w += tw;
+            sum_h += th;
+        }
+        let norm = k.norm(hinv);
+        (norm * sum_w, -norm * hinv * sum_h)
+    }
+}
+
+/// The per-pair terms of κ: a loop over slices passed as arguments, so the compiler knows the
+/// outputs alias nothing and makes it SIMD.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn kappa_terms<K: Kernel>(
+    kernel: &K,
+    dim: f64,
+    hinv: f64,
+    support2: f64,
+    r2: &[f64],
+    r: &[f64],
+    x: &[f64],
+    tw: &mut [f64],
+    th: &mut [f64],
+) {
+    let n = r2.len();
+    let (r, x, tw, th) = (&r[..n], &x[..n], &mut tw[..n], &mut th[..n]);
+    for i in 0..n {
+        let q = r[i] * hinv;
+        let (w, dw) = kernel.shape(q);
+        let inside = r2[i] < support2;
+        tw[i] = if inside { x[i] * w } else { 0.0 };
+        th[i] = if inside {
+            x[i] * (dim * w + q * dw)
+        } else {
+            0.0
+        };
+    }
 }
 
 /// Solve particle a's h from `h0`; `h_reach` is the largest h its listed neighbours serve
 /// exactly. Unknown: h with κ(h) = X_a η^D / h^D (i.e. h = η V^{1/D}); then ρ = m_a κ / X_a.
+#[inline(always)]
 fn solve_one<const D: usize>(
     sys: &System<D>,
-    x: &[f64],
+    xa: f64,
     a: usize,
     h0: f64,
     h_reach: f64,
+    mut kappa_of: impl KappaAt,
 ) -> HSolve {
-    let xa = x[a];
     let to_rho = sys.particles.mass[a] / xa;
     let eta_d = sys.eta.powi(D as i32);
     let h_cap = h_reach.min(sys.h_max);
@@ -185,12 +317,12 @@ fn solve_one<const D: usize>(
             capped,
         };
     if sys.particles.body[a] != 0 || sys.particles.port[a] != 0 || h0_beyond_list {
-        let (kappa, dkappa) = kappa_at(sys, x, a, h);
+        let (kappa, dkappa) = kappa_of.at(h);
         return finish(h, kappa, dkappa, 1, h0 > h_cap && h_cap < sys.h_max, false);
     }
     loop {
         it += 1;
-        let (kappa, dkappa) = kappa_at(sys, x, a, h);
+        let (kappa, dkappa) = kappa_of.at(h);
         let kappa_h = xa * eta_d / h.powi(D as i32);
         let f = kappa - kappa_h;
         // Converged: the summation density and the h-implied density agree.
@@ -217,7 +349,7 @@ fn solve_one<const D: usize>(
             }
         }
         if h_new > h_cap {
-            let (kappa, dkappa) = kappa_at(sys, x, a, h_cap);
+            let (kappa, dkappa) = kappa_of.at(h_cap);
             let capped = h_cap >= sys.h_max;
             return finish(h_cap, kappa, dkappa, it, !capped, capped);
         }
