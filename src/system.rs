@@ -4,7 +4,7 @@
 use crate::domain::{Domain, ImageCode};
 use crate::eos::{Eos, EosConfig};
 use crate::kernel::DimKernel;
-use crate::neighbours::{unpack, CellGrid, NeighbourList};
+use crate::neighbours::{cut, unpack, CellGrid, NeighbourList};
 use crate::parallel::exact::ExactSum;
 use crate::particles::{Particles, Vector};
 use crate::threads::{LIGHT, MEDIUM};
@@ -259,54 +259,18 @@ impl<const D: usize> System<D> {
     /// The working list: the master list cut to `max(2h_a, 2h_b)` once h is final, without
     /// wall–wall pairs unless the scheme asked for them (`wall_pairs`).
     pub fn compact_neighbours(&mut self) {
-        self.compact_neighbours_visiting(&mut vec![(); self.particles.len()], |_, _, _, _| {});
+        self.compact_neighbours_with(&mut vec![(); self.particles.len()], &cut::NoVisit);
     }
 
-    /// [`Self::compact_neighbours`], calling `visit(sys, a, &mut out[a], &pair)` on every pair kept,
-    /// in working-list order, as [`Self::gather`] would afterwards: a pass that needs only
-    /// the pairs' geometry and velocities (standard SPH's velocity gradients) rides on the
-    /// cut instead of walking the lists once more. `pair.index` is not known yet during the
-    /// cut (the row offsets come after it) and is `usize::MAX`.
-    pub fn compact_neighbours_visiting<T: Send, F>(&mut self, out: &mut [T], visit: F)
-    where
-        F: Fn(&Self, usize, &mut T, &Pair<D>) + Sync,
-    {
+    /// [`Self::compact_neighbours`], with `visitor` run on the kept pairs of each row, in
+    /// working-list order, as [`Self::gather`] would afterwards (see [`cut`]).
+    pub fn compact_neighbours_with<V: cut::CutVisitor<D>>(
+        &mut self,
+        out: &mut [V::Acc],
+        visitor: &V,
+    ) {
         let t0 = std::time::Instant::now();
-        let sys = &*self;
-        let p = &sys.particles;
-        let dom = &sys.domain;
-        let k = &sys.kernel;
-        let wall_pairs = sys.wall_pairs;
-        // What the cut reads of a neighbour, packed: one cache line instead of three.
-        let kin: Vec<(Vector<D>, Vector<D>, f64)> = (0..p.len())
-            .into_par_iter()
-            .with_min_len(LIGHT)
-            .map(|i| (p.pos[i], p.vel[i], k.radius(p.h[i])))
-            .collect();
-        let list = sys.verlet.list.filtered_with(out, |a, acc, e| {
-            let (b, code) = unpack(e);
-            if !wall_pairs && p.body[a] != 0 && p.body[b] != 0 {
-                return false;
-            }
-            let ((xa, _, ra), (xb, vb, rb)) = (&kin[a], &kin[b]);
-            let reach = ra.max(*rb);
-            let dx = dom.separation(xa, xb, code);
-            let r2 = dx.norm_squared();
-            if r2 >= reach * reach {
-                return false;
-            }
-            let pair = Pair {
-                b,
-                code,
-                dx,
-                r: r2.sqrt(),
-                vb: dom.image_velocity(vb, code),
-                index: usize::MAX,
-            };
-            visit(sys, a, acc, &pair);
-            true
-        });
-        self.neighbours = list;
+        self.neighbours = cut::cut(self, out, visitor);
         self.stats.seconds_neighbours += t0.elapsed().as_secs_f64();
     }
 

@@ -50,20 +50,48 @@ pub fn for_each_row<P: RowPass>(pass: &P, out: &mut [P::Acc]) {
         .enumerate()
         .with_min_len(64)
         .for_each_init(P::Scratch::default, |scratch, (a, acc)| {
-            wide.row(pass, a, acc, scratch)
+            wide.run(OneRow {
+                pass,
+                a,
+                acc,
+                scratch,
+            })
         });
+}
+
+struct OneRow<'a, P: RowPass> {
+    pass: &'a P,
+    a: usize,
+    acc: &'a mut P::Acc,
+    scratch: &'a mut P::Scratch,
+}
+
+impl<P: RowPass> Wide for OneRow<'_, P> {
+    type Output = ();
+    #[inline(always)]
+    fn run(self) {
+        self.pass.row(self.a, self.acc, self.scratch)
+    }
+}
+
+/// A piece of work compiled at every [`Width`] (a trait, not a closure: a closure is compiled
+/// on its own, without the target features of the function that calls it). Implementations
+/// are `#[inline(always)]`.
+pub trait Wide {
+    type Output;
+    fn run(self) -> Self::Output;
 }
 
 /// The vector width the CPU offers, decided once per pass.
 #[derive(Clone, Copy)]
-enum Width {
+pub enum Width {
     Baseline,
     #[cfg(target_arch = "x86_64")]
     Avx2,
 }
 
 impl Width {
-    fn detect() -> Self {
+    pub fn detect() -> Self {
         #[cfg(target_arch = "x86_64")]
         {
             if std::is_x86_feature_detected!("avx2") {
@@ -73,22 +101,23 @@ impl Width {
         Width::Baseline
     }
 
+    /// `work.run()`, compiled for this width.
     #[inline(always)]
-    fn row<P: RowPass>(self, pass: &P, a: usize, acc: &mut P::Acc, scratch: &mut P::Scratch) {
+    pub fn run<W: Wide>(self, work: W) -> W::Output {
         match self {
-            Width::Baseline => pass.row(a, acc, scratch),
+            Width::Baseline => work.run(),
             // SAFETY: `detect` found AVX2 on this CPU.
             #[cfg(target_arch = "x86_64")]
-            Width::Avx2 => unsafe { row_avx2(pass, a, acc, scratch) },
+            Width::Avx2 => unsafe { run_avx2(work) },
         }
     }
 }
 
-/// [`RowPass::row`] compiled for AVX2 (the pass inlines into it).
+/// [`Wide::run`] compiled for AVX2 (the work inlines into it).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn row_avx2<P: RowPass>(pass: &P, a: usize, acc: &mut P::Acc, scratch: &mut P::Scratch) {
-    pass.row(a, acc, scratch)
+unsafe fn run_avx2<W: Wide>(work: W) -> W::Output {
+    work.run()
 }
 
 #[cfg(test)]

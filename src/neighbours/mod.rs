@@ -4,6 +4,7 @@
 //! *and* scatter neighbours for variable h. Entries pack the neighbour index (low 27 bits)
 //! with the image code (high 5 bits: mirror ghosts of reflecting walls).
 
+pub mod cut;
 mod grid;
 pub mod lanes;
 
@@ -190,24 +191,18 @@ impl NeighbourList {
         Self { offsets, entries }
     }
 
-    /// A copy holding only the entries for which `keep(a, &mut acc[a], entry)` holds (used to
-    /// drop the skin once smoothing lengths have converged), chunked in parallel; `keep` may
-    /// accumulate what it measured on the kept entries into `acc[a]`, so a pass over the kept
-    /// pairs can ride on the cut instead of walking the lists again.
-    pub fn filtered_with<T: Send>(
+    /// A copy whose row a is what `cut(a, &mut acc[a], row, out)` appends to `out` from the
+    /// row (used to drop the skin once smoothing lengths have converged, see [`cut`]),
+    /// chunked in parallel; `cut` may accumulate what it measured on the kept entries into
+    /// `acc[a]`, so a pass over the kept pairs can ride on the cut instead of walking the
+    /// lists again.
+    pub fn filtered_rows<T: Send>(
         &self,
         acc: &mut [T],
-        keep: impl Fn(usize, &mut T, u32) -> bool + Sync,
+        cut: impl Fn(usize, &mut T, &[u32], &mut Vec<u32>) + Sync,
     ) -> Self {
         let bound = |start: usize, end: usize| self.offsets[end] - self.offsets[start];
-        Self::from_rows_with(acc, bound, |a, t, out| {
-            // a plain loop: `extend(filter(..))` went through a call per entry
-            for &e in self.of(a) {
-                if keep(a, t, e) {
-                    out.push(e);
-                }
-            }
-        })
+        Self::from_rows_with(acc, bound, |a, t, out| cut(a, t, self.of(a), out))
     }
 
     /// Sort every row by `key(entry)` (in parallel by rows): rows in an order that does not

@@ -17,7 +17,10 @@ mod force;
 pub(crate) use force::{force_pass, PressureForm};
 
 use super::{smoothing, Scheme, SchemeError};
-use crate::system::{Pair, System};
+use crate::kernel::{DimKernel, Kernel, KernelVisitor};
+use crate::neighbours::cut::{CutBlock, CutVisitor};
+use crate::neighbours::lanes::LANES;
+use crate::system::System;
 use crate::threads::LIGHT;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -267,21 +270,77 @@ fn cut_lists_with_gradient_sums<const D: usize>(sys: &mut System<D>) -> Vec<Grad
         .with_min_len(LIGHT)
         .map(|&h| GradAcc::new(h))
         .collect();
-    sys.compact_neighbours_visiting(&mut grads, add_gradient_pair);
+    let kernel = sys.kernel;
+    kernel.visit(GradientCut {
+        sys,
+        grads: &mut grads,
+    });
     grads
 }
 
+/// The cut with the gradient sums, handed the concrete kernel.
+struct GradientCut<'a, const D: usize> {
+    sys: &'a mut System<D>,
+    grads: &'a mut [GradAcc<D>],
+}
+
+impl<const D: usize> KernelVisitor<D> for GradientCut<'_, D> {
+    type Output = ();
+    fn visit<K: Kernel + Copy>(self, kernel: &DimKernel<D, K>) {
+        self.sys
+            .compact_neighbours_with(self.grads, &GradientSums { kernel: *kernel });
+    }
+}
+
 /// Pair b's share of a's velocity-gradient sums Σ m_b v_ab·∇_a W_ab(h_a) and
-/// Σ m_b v_ab ⊗ ∇_a W_ab(h_a).
-#[inline(always)]
-fn add_gradient_pair<const D: usize>(sys: &System<D>, a: usize, g: &mut GradAcc<D>, pr: &Pair<D>) {
-    let p = &sys.particles;
-    let dwdr = sys.kernel.dwdr_hinv(pr.r, g.hinv);
-    if pr.r > 0.0 && dwdr != 0.0 {
-        let gw = pr.dx * (dwdr / pr.r);
-        let vab = p.vel[a] - pr.vb;
-        g.div += p.mass[pr.b] * vab.dot(&gw);
-        g.grad += p.mass[pr.b] * vab * gw.transpose();
+/// Σ m_b v_ab ⊗ ∇_a W_ab(h_a), for the kept lanes of a block.
+struct GradientSums<const D: usize, K> {
+    kernel: DimKernel<D, K>,
+}
+
+impl<const D: usize, K: Kernel + Copy> CutVisitor<D> for GradientSums<D, K> {
+    type Acc = GradAcc<D>;
+
+    #[inline(always)]
+    fn block(&self, _: &System<D>, _: usize, g: &mut GradAcc<D>, blk: &CutBlock) {
+        let k = self.kernel;
+        let hinv = g.hinv;
+        let mut div = [0.0; LANES];
+        let mut grad = [[[0.0; LANES]; 3]; 3];
+        for i in 0..blk.lanes {
+            let r = blk.r2[i].sqrt();
+            let dwdr = k.dwdr_hinv(r, hinv);
+            // a lane that is not kept, at zero distance or beyond h_a's support adds nothing
+            let adds = blk.keep[i] && r > 0.0 && dwdr != 0.0;
+            let f = dwdr / r;
+            let mut gw = [0.0; 3];
+            let mut dot = 0.0;
+            for c in 0..D {
+                gw[c] = blk.dx[c][i] * f;
+                dot += blk.vab[c][i] * gw[c];
+            }
+            let m = blk.m[i];
+            div[i] = if adds { m * dot } else { 0.0 };
+            for r in 0..D {
+                for c in 0..D {
+                    grad[r][c][i] = if adds {
+                        (m * blk.vab[r][i]) * gw[c]
+                    } else {
+                        0.0
+                    };
+                }
+            }
+        }
+        // in list order; a lane's exact zero leaves a sum as it was (a sum that starts at
+        // +0 never becomes −0), so the sums equal those over the kept pairs alone
+        for i in 0..blk.n {
+            g.div += div[i];
+            for r in 0..D {
+                for c in 0..D {
+                    g.grad[(r, c)] += grad[r][c][i];
+                }
+            }
+        }
     }
 }
 
