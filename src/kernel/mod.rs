@@ -228,9 +228,10 @@ pub trait KernelVisitor<const D: usize> {
 
 impl<const D: usize> DimKernel<D> {
     /// Run `v` with the concrete kernel type, so the shape inlines into the loop with no
-    /// match per pair. The enum's match is perfectly predicted, but it keeps the compiler from
-    /// scheduling the kernel's arithmetic with the loop's; on the standard force pass this was
-    /// worth BENCH_FORCE (issue 19, BENCHMARKS.md).
+    /// match per pair. In a scalar pair loop the enum's match is perfectly predicted and
+    /// costs nothing measurable (the standard force pass took the same time either way), but
+    /// a match inside a loop keeps the compiler from making the loop SIMD, which the lane
+    /// passes ([`crate::neighbours::lanes`]) need.
     pub fn visit<V: KernelVisitor<D>>(&self, v: V) -> V::Output {
         let (sigma, kernel) = (self.sigma, &self.kernel);
         dispatch!(kernel, k => v.visit(&DimKernel::<D, _> { kernel: *k, sigma }))

@@ -45,7 +45,11 @@ pub trait RowPass: Sync {
 
 /// `pass.row(a, &mut out[a], ..)` for every particle, in parallel (rows in chunks of 64).
 pub fn for_each_row<P: RowPass>(pass: &P, out: &mut [P::Acc]) {
-    let wide = Width::detect();
+    for_each_row_at(Width::detect(), pass, out)
+}
+
+/// [`for_each_row`] at a given width.
+fn for_each_row_at<P: RowPass>(wide: Width, pass: &P, out: &mut [P::Acc]) {
     out.par_iter_mut()
         .enumerate()
         .with_min_len(64)
@@ -146,6 +150,55 @@ mod tests {
                 sum = d[..block.len()].iter().fold(sum, |s, q| s + q);
             }
             *acc = sum;
+        }
+    }
+
+    /// A pair term with a square root, a division, a select and a kernel derivative, in a
+    /// loop over lanes as the force pass writes it.
+    struct KernelTerms<'a> {
+        x: &'a [f64],
+        rows: &'a [Vec<usize>],
+    }
+
+    impl RowPass for KernelTerms<'_> {
+        type Acc = f64;
+        type Scratch = [[f64; LANES]; 2];
+        #[inline(always)]
+        fn row(&self, a: usize, acc: &mut f64, s: &mut [[f64; LANES]; 2]) {
+            use crate::kernel::{CubicSplineM4, DimKernel};
+            let k = DimKernel::<3, _>::new(CubicSplineM4);
+            let [d, t] = s;
+            let mut sum = 0.0;
+            for block in self.rows[a].chunks(LANES) {
+                for (i, &b) in block.iter().enumerate() {
+                    d[i] = self.x[a] - self.x[b];
+                }
+                for i in 0..padded(block.len()) {
+                    let r = (d[i] * d[i] + 0.01).sqrt();
+                    let f = k.dwdr_hinv(r, 1.3) / (r + 0.5);
+                    t[i] = if d[i] > 0.0 { f * d[i] } else { f.min(-0.1) };
+                }
+                sum = t[..block.len()].iter().fold(sum, |s, q| s + q);
+            }
+            *acc = sum;
+        }
+    }
+
+    #[test]
+    fn every_width_gives_the_same_bits() {
+        let n = 500;
+        let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin() * 1.7).collect();
+        let rows: Vec<Vec<usize>> = (0..n)
+            .map(|a| (0..a % 67).map(|k| (a * 13 + k * 5) % n).collect())
+            .collect();
+        let pass = KernelTerms { x: &x, rows: &rows };
+        let mut base = vec![0.0; n];
+        for_each_row_at(Width::Baseline, &pass, &mut base);
+        let mut wide = vec![0.0; n];
+        for_each_row_at(Width::detect(), &pass, &mut wide);
+        assert!(base.iter().any(|&v| v != 0.0));
+        for a in 0..n {
+            assert_eq!(base[a].to_bits(), wide[a].to_bits(), "row {a}");
         }
     }
 

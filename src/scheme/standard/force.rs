@@ -4,9 +4,9 @@
 //!
 //! The pair loop runs on lanes ([`crate::neighbours::lanes`]): each row's neighbours are read
 //! into columns, the pair terms are computed in one loop with no branch, then summed in list
-//! order. Measured on the 3D periodic box of `sphfmu bench` (97,336 particles, 62 neighbours,
-//! 1 thread, Intel Xeon VM; BENCHMARKS.md, issue 19), the force pass took 1.19 s for 10 steps
-//! as a gather with a closure per pair, and BENCH_LANES_AFTER on lanes.
+//! order. Measured on the 3D periodic box of `sphfmu bench --sizes 100000 --dims 3 --steps 10
+//! --threads 1` (97,336 particles, 62 neighbours, Intel Xeon VM; BENCHMARKS.md, issue 19), the
+//! force pass took 1.17-1.19 s as a gather with a closure per pair, and 0.71-0.73 s on lanes.
 
 use super::StandardParams;
 use crate::kernel::{DimKernel, Kernel, KernelVisitor};
