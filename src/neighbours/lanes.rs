@@ -30,7 +30,7 @@ pub const PAD: usize = 8;
 /// `n` rounded up to [`PAD`], at most [`LANES`].
 #[inline(always)]
 pub fn padded(n: usize) -> usize {
-    ((n + PAD - 1) / PAD * PAD).min(LANES)
+    (n.div_ceil(PAD) * PAD).min(LANES)
 }
 
 /// A pass over neighbour rows written on blocks of lanes (see the module comment).

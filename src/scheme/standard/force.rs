@@ -339,8 +339,9 @@ impl<const D: usize, K: Kernel + Copy, const PLAIN: bool> RowPass for ForceRows<
 
 impl<const D: usize, K: Kernel + Copy, const PLAIN: bool> ForceRows<'_, D, K, PLAIN> {
     /// The pair terms of one block: one pair per lane, no branch (selects only), so the loop
-    /// becomes SIMD.
+    /// becomes SIMD. (Index loops: a lane index reads several arrays at once.)
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)]
     fn terms(
         &self,
         ra: &ForceRecord<D>,

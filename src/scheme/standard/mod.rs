@@ -301,7 +301,9 @@ struct GradientSums<const D: usize, K> {
 impl<const D: usize, K: Kernel + Copy> CutVisitor<D> for GradientSums<D, K> {
     type Acc = GradAcc<D>;
 
+    /// (Index loops: a lane index reads several arrays at once.)
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)]
     fn block(&self, _: &System<D>, _: usize, g: &mut GradAcc<D>, blk: &CutBlock) {
         let k = self.kernel;
         let hinv = g.hinv;
