@@ -162,19 +162,15 @@ impl<const D: usize, K: Kernel + Copy> RowPass for SolveRows<'_, D, K> {
     }
 }
 
-/// κ(h) and ∂κ/∂h of one particle (a trait, not a closure: a closure is compiled on its own,
+/// κ(h) and ∂κ/∂h of one particle (a struct, not a closure: a closure is compiled on its own,
 /// without the AVX2 of the pass that calls it).
-trait KappaAt {
-    fn at(&mut self, h: f64) -> (f64, f64);
-}
-
 struct KappaOf<'a, const D: usize, K> {
     lanes: &'a mut KappaLanes,
     kernel: DimKernel<D, K>,
     xa: f64,
 }
 
-impl<const D: usize, K: Kernel + Copy> KappaAt for KappaOf<'_, D, K> {
+impl<const D: usize, K: Kernel + Copy> KappaOf<'_, D, K> {
     #[inline(always)]
     fn at(&mut self, h: f64) -> (f64, f64) {
         self.lanes.kappa(&self.kernel, self.xa, h)
@@ -287,13 +283,13 @@ fn kappa_terms<K: Kernel>(
 /// Solve particle a's h from `h0`; `h_reach` is the largest h its listed neighbours serve
 /// exactly. Unknown: h with κ(h) = X_a η^D / h^D (i.e. h = η V^{1/D}); then ρ = m_a κ / X_a.
 #[inline(always)]
-fn solve_one<const D: usize>(
+fn solve_one<const D: usize, K: Kernel + Copy>(
     sys: &System<D>,
     xa: f64,
     a: usize,
     h0: f64,
     h_reach: f64,
-    mut kappa_of: impl KappaAt,
+    mut kappa_of: KappaOf<'_, D, K>,
 ) -> HSolve {
     let to_rho = sys.particles.mass[a] / xa;
     let eta_d = sys.eta.powi(D as i32);
