@@ -10,7 +10,7 @@
 //! test on the 3D Sod holds for about two entries in three at random (the skin and the
 //! scatter neighbours are the rest), so a branch per entry was mispredicted often.
 
-use super::lanes::{padded, Wide, Width, LANES};
+use super::lanes::{fill_pair, padded, Wide, Width, LANES};
 use super::{unpack, NeighbourList};
 use crate::particles::Vector;
 use crate::system::System;
@@ -136,12 +136,8 @@ impl<const D: usize, V: CutVisitor<D>> Wide for CutRow<'_, D, V> {
             for (i, &e) in entries.iter().enumerate() {
                 let (b, code) = unpack(e);
                 let rb = &self.recs[b];
-                let d = dom.separation(&ra.x, &rb.x, code);
-                let vab = ra.v - dom.image_velocity(&rb.v, code);
-                for k in 0..D {
-                    blk.dx[k][i] = d[k];
-                    blk.vab[k][i] = vab[k];
-                }
+                let pair = ((&ra.x, &ra.v), (&rb.x, &rb.v));
+                fill_pair(dom, pair.0, pair.1, code, &mut blk.dx, &mut blk.vab, i);
                 reach[i] = rb.reach;
                 blk.m[i] = rb.m;
                 wall[i] = rb.wall;

@@ -15,6 +15,8 @@
 //! bits on both paths: Rust never contracts a·b + c into a fused multiply-add by itself, and
 //! a lane computes exactly what the scalar loop would.
 
+use crate::domain::{Domain, ImageCode};
+use crate::particles::Vector;
 use rayon::prelude::*;
 
 /// Pairs per block: a row is read in blocks of up to this many neighbours into arrays of
@@ -31,6 +33,29 @@ pub const PAD: usize = 8;
 #[inline(always)]
 pub fn padded(n: usize) -> usize {
     (n.div_ceil(PAD) * PAD).min(LANES)
+}
+
+/// The geometry lanes of one pair: x_a − image(x_b) into `dx[..][i]` and v_a − image(v_b) into
+/// `vab[..][i]` (components past D left alone), through the domain's image `code`; returns
+/// image(v_b).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn fill_pair<const D: usize>(
+    dom: &Domain<D>,
+    (xa, va): (&Vector<D>, &Vector<D>),
+    (xb, vb): (&Vector<D>, &Vector<D>),
+    code: ImageCode,
+    dx: &mut [[f64; LANES]; 3],
+    vab: &mut [[f64; LANES]; 3],
+    i: usize,
+) -> Vector<D> {
+    let d = dom.separation(xa, xb, code);
+    let vb = dom.image_velocity(vb, code);
+    for k in 0..D {
+        dx[k][i] = d[k];
+        vab[k][i] = va[k] - vb[k];
+    }
+    vb
 }
 
 /// A pass over neighbour rows written on blocks of lanes (see the module comment).

@@ -10,7 +10,7 @@
 
 use super::StandardParams;
 use crate::kernel::{DimKernel, Kernel, KernelVisitor};
-use crate::neighbours::lanes::{for_each_row, padded, RowPass, LANES};
+use crate::neighbours::lanes::{fill_pair, for_each_row, padded, RowPass, LANES};
 use crate::neighbours::unpack;
 use crate::particles::Vector;
 use crate::system::System;
@@ -290,13 +290,8 @@ impl<const D: usize, K: Kernel + Copy, const PLAIN: bool> RowPass for ForceRows<
             for (i, &e) in entries.iter().enumerate() {
                 let (b, code) = unpack(e);
                 let rb = &recs[b];
-                let d = dom.separation(&ra.x, &rb.x, code);
-                let vb = dom.image_velocity(&rb.v, code);
-                let vab = ra.v - vb;
-                for k in 0..D {
-                    blk.dx[k][i] = d[k];
-                    blk.vab[k][i] = vab[k];
-                }
+                let pair = ((&ra.x, &ra.v), (&rb.x, &rb.v));
+                let vb = fill_pair(dom, pair.0, pair.1, code, &mut blk.dx, &mut blk.vab, i);
                 blk.hinv[i] = rb.hinv;
                 blk.m[i] = rb.m;
                 blk.pstd[i] = rb.pstd;
