@@ -8,7 +8,11 @@
 //! test and the visitor's pair terms run as branch-free loops over the lanes, and the kept
 //! entries are appended with no branch (write, then advance by the test's 0 or 1). The keep
 //! test on the 3D Sod holds for about two entries in three at random (the skin and the
-//! scatter neighbours are the rest), so a branch per entry was mispredicted often.
+//! scatter neighbours are the rest), which is why the branch per entry was suspected. Measured
+//! against the per-entry loop it replaced, it is neutral, not a gain (BENCHMARKS.md, "Pair
+//! loops on lanes": 5 % faster on the periodic box, 5 % slower on the 3D Sod): the gradient
+//! terms are now computed for the dropped third of the entries too. The plain cut
+//! ([`NoVisit`]) also fills v_ab and m_b, which only a visitor reads.
 
 use super::lanes::{fill_pair, padded, Wide, Width, LANES};
 use super::{unpack, NeighbourList};
