@@ -4,7 +4,7 @@
 use crate::domain::{Domain, ImageCode};
 use crate::eos::{Eos, EosConfig};
 use crate::kernel::DimKernel;
-use crate::neighbours::{cut, unpack, CellGrid, NeighbourList};
+use crate::neighbours::{cut, slack, unpack, CellGrid, NeighbourList};
 use crate::parallel::exact::ExactSum;
 use crate::particles::{Particles, Vector};
 use crate::threads::{LIGHT, MEDIUM};
@@ -175,9 +175,11 @@ impl<const D: usize> System<D> {
     /// the build, so it is listed while `R_a + e_a + E ≤ Rb_a` for all a. u is the centre of
     /// the displacements' bounding box (its components along reflecting axes zero): a flow
     /// that moves as a whole then uses the skin for its relative motion only, where u = 0
-    /// would spend it twice on the common drift. (Flows moving both ways, like the two
-    /// shocks of a periodic Sod tube, keep u near 0 and gain nothing.) The list is rebuilt (reach 2h(1+skin)) when
-    /// `rebuild` is set or no slack is left.
+    /// would spend it twice on the common drift. Flows moving both ways, like the two
+    /// shocks of a periodic Sod tube, keep u near 0 and gain nothing from it, so each
+    /// particle also gets the local bound of [`slack`] (u chosen per neighbourhood), and the
+    /// smaller of the two is s_a: listed while `R_a + s_a ≤ Rb_a`. The list is rebuilt
+    /// (reach 2h(1+skin)) when `rebuild` is set or no slack is left.
     pub fn prepare_master_list(&mut self, skin: f64, mut rebuild: bool) -> Vec<f64> {
         let t0 = std::time::Instant::now();
         let n = self.particles.len();
@@ -187,7 +189,6 @@ impl<const D: usize> System<D> {
         }
         // Displacement of each particle since the build relative to u, and the largest one.
         let mut disp = vec![0.0; n];
-        let mut delta = 0.0;
         if !rebuild {
             let dom = &self.domain;
             let pos = &self.particles.pos;
@@ -216,14 +217,21 @@ impl<const D: usize> System<D> {
                 .with_min_len(LIGHT)
                 .map(|d| (d - u).norm())
                 .collect();
-            delta = disp.iter().cloned().fold(0.0, f64::max);
+            let delta = disp.iter().cloned().fold(0.0, f64::max);
+            // The bound |d_a − d_b| ≤ e_a + E, or the local one of `slack` where smaller.
+            let reach_max = v.reach.iter().cloned().fold(0.0, f64::max);
+            let local = slack::local_bound(pos, &moved, reach_max, dom);
+            disp.par_iter_mut()
+                .with_min_len(LIGHT)
+                .zip(local)
+                .for_each(|(e, l)| *e = (*e + delta).min(l));
             let k = &self.kernel;
             let h = &self.particles.h;
             // Rebuild when some particle's current support already lacks slack.
             rebuild = (0..n)
                 .into_par_iter()
                 .with_min_len(LIGHT)
-                .any(|i| k.radius(h[i]) + disp[i] + delta > v.reach[i]);
+                .any(|i| k.radius(h[i]) + disp[i] > v.reach[i]);
         }
         if rebuild {
             let tb = std::time::Instant::now();
@@ -235,24 +243,19 @@ impl<const D: usize> System<D> {
             self.grid = CellGrid::build(&p.pos, &self.domain, &v.reach);
             v.list = NeighbourList::build(&p.pos, &v.reach, &self.domain, &self.grid);
             if self.canonical_order {
-                let id = &p.id;
-                v.list.sort_rows_by(|e| {
-                    let (b, code) = unpack(e);
-                    (id[b], code)
-                });
+                v.list.sort_rows_by_id(&p.id);
             }
             v.pos.clone_from(&p.pos);
             v.builds += 1;
             disp.iter_mut().for_each(|d| *d = 0.0);
-            delta = 0.0;
             self.stats.seconds_list_builds += tb.elapsed().as_secs_f64();
         }
         self.stats.seconds_neighbours += t0.elapsed().as_secs_f64();
-        // listed while R_a + e_a + E ≤ Rb_a (see above)
+        // listed while R_a + s_a ≤ Rb_a, s_a the bound on |d_a − d_b| (see above)
         v.reach
             .iter()
             .zip(&disp)
-            .map(|(&r, &d)| (r - d - delta) / crate::kernel::SUPPORT)
+            .map(|(&r, &d)| (r - d) / crate::kernel::SUPPORT)
             .collect()
     }
 

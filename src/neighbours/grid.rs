@@ -168,8 +168,9 @@ impl<const D: usize> CellGrid<D> {
     }
 
     /// Visit every cell that can hold points within `reach` of the point with local
-    /// coordinates `y` (see [`Self::local`]), as `f(start, end, shift)`: positions
-    /// `start..end` of [`Self::sorted`] hold the cell's particles, and `shift` is the period
+    /// coordinates `y` (see [`Self::local`]), in runs of neighbouring cells along x, as
+    /// `f(start, end, shift)`: positions `start..end` of [`Self::sorted`] hold the run's
+    /// particles, and `shift` is the period
     /// on the axes where the cell was reached across it (with its sign, 0 elsewhere), so
     /// `(y − y_b) − shift` is the separation from the image of b near y. Taken in that order
     /// it is exactly the negative of the separation b finds for y (a pair's two searches
@@ -233,23 +234,49 @@ impl<const D: usize> CellGrid<D> {
             }
             counts[k] = m;
         }
+        // Cells along x (the fastest axis of the cell numbering) that follow each other in
+        // the numbering and share a shift hold one contiguous run of `sorted`: hand out each
+        // such run at once (a sphere of 2 cells' radius spans ~20 runs but ~70 cells of two
+        // particles each in 3D, and the per-cell work cost as much as the candidates).
         let mut idx = [0usize; D];
         let mut sh = [0.0; D];
         loop {
-            let mut c = 0usize;
+            let mut base = 0usize;
             let mut g2 = 0.0;
-            for k in (0..D).rev() {
-                c = c * self.dims[k] + ranges[k][idx[k]] as usize;
+            for k in (1..D).rev() {
+                base = base * self.dims[k] + ranges[k][idx[k]] as usize;
                 g2 += gaps[k][idx[k]];
                 sh[k] = shifts[k][idx[k]];
             }
+            base *= self.dims[0];
             if g2 < r2 {
-                let (s, e) = (self.cell_start[c] as usize, self.cell_start[c + 1] as usize);
-                if s < e {
-                    f(s, e, &sh);
+                // the open run: first and last cell along x, and its shift
+                let mut run: Option<(u32, u32, f64)> = None;
+                for j in 0..counts[0] {
+                    if g2 + gaps[0][j] >= r2 {
+                        continue;
+                    }
+                    let (ci, s) = (ranges[0][j], shifts[0][j]);
+                    match &mut run {
+                        Some((_, last, rs)) if ci == *last + 1 && s == *rs => *last = ci,
+                        _ => {
+                            if let Some((first, last, rs)) = run {
+                                sh[0] = rs;
+                                self.visit_run(base, first, last, &sh, &mut f);
+                            }
+                            run = Some((ci, ci, s));
+                        }
+                    }
+                }
+                if let Some((first, last, rs)) = run {
+                    sh[0] = rs;
+                    self.visit_run(base, first, last, &sh, &mut f);
                 }
             }
-            let mut k = 0;
+            if D == 1 {
+                return;
+            }
+            let mut k = 1;
             loop {
                 idx[k] += 1;
                 if idx[k] < counts[k] {
@@ -261,6 +288,23 @@ impl<const D: usize> CellGrid<D> {
                     return;
                 }
             }
+        }
+    }
+
+    /// Hand cells `base + first ..= base + last` (one run of `sorted`) to `f`, if not empty.
+    #[inline(always)]
+    fn visit_run(
+        &self,
+        base: usize,
+        first: u32,
+        last: u32,
+        sh: &[f64; D],
+        f: &mut impl FnMut(usize, usize, &[f64; D]),
+    ) {
+        let s = self.cell_start[base + first as usize] as usize;
+        let e = self.cell_start[base + last as usize + 1] as usize;
+        if s < e {
+            f(s, e, sh);
         }
     }
 }

