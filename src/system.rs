@@ -176,9 +176,10 @@ impl<const D: usize> System<D> {
     /// the displacements' bounding box (its components along reflecting axes zero): a flow
     /// that moves as a whole then uses the skin for its relative motion only, where u = 0
     /// would spend it twice on the common drift. Flows moving both ways, like the two
-    /// shocks of a periodic Sod tube, keep u near 0 and gain nothing from it, so each
-    /// particle also gets the local bound of [`slack`] (u chosen per neighbourhood), and the
-    /// smaller of the two is s_a: listed while `R_a + s_a ≤ Rb_a`. The list is rebuilt
+    /// shocks of a periodic Sod tube, keep u near 0 and gain nothing from it, so once that
+    /// bound has run out each particle also gets the local bound of [`slack`] (u chosen per
+    /// neighbourhood), and the smaller of the two is s_a: listed while `R_a + s_a ≤ Rb_a`.
+    /// The list is rebuilt
     /// (reach 2h(1+skin)) when `rebuild` is set or no slack is left.
     pub fn prepare_master_list(&mut self, skin: f64, mut rebuild: bool) -> Vec<f64> {
         let t0 = std::time::Instant::now();
@@ -218,20 +219,30 @@ impl<const D: usize> System<D> {
                 .map(|d| (d - u).norm())
                 .collect();
             let delta = disp.iter().cloned().fold(0.0, f64::max);
-            // The bound |d_a − d_b| ≤ e_a + E, or the local one of `slack` where smaller.
-            let reach_max = v.reach.iter().cloned().fold(0.0, f64::max);
-            let local = slack::local_bound(pos, &moved, reach_max, dom);
             disp.par_iter_mut()
                 .with_min_len(LIGHT)
-                .zip(local)
-                .for_each(|(e, l)| *e = (*e + delta).min(l));
+                .for_each(|e| *e += delta);
             let k = &self.kernel;
             let h = &self.particles.h;
             // Rebuild when some particle's current support already lacks slack.
-            rebuild = (0..n)
-                .into_par_iter()
-                .with_min_len(LIGHT)
-                .any(|i| k.radius(h[i]) + disp[i] > v.reach[i]);
+            let lacks = |disp: &[f64]| {
+                (0..n)
+                    .into_par_iter()
+                    .with_min_len(LIGHT)
+                    .any(|i| k.radius(h[i]) + disp[i] > v.reach[i])
+            };
+            rebuild = lacks(&disp);
+            if rebuild {
+                // The local bound of `slack` where smaller, only when the global one has run
+                // out (the closed tank never gets there, and it costs an O(N) pass a step).
+                let reach_max = v.reach.iter().cloned().fold(0.0, f64::max);
+                let local = slack::local_bound(pos, &moved, reach_max, dom);
+                disp.par_iter_mut()
+                    .with_min_len(LIGHT)
+                    .zip(local)
+                    .for_each(|(e, l)| *e = e.min(l));
+                rebuild = lacks(&disp);
+            }
         }
         if rebuild {
             let tb = std::time::Instant::now();
