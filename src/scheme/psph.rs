@@ -97,46 +97,30 @@ impl<const D: usize> Psph<D> {
     fn state(&mut self, sys: &mut System<D>) {
         let n = sys.particles.len();
         self.ones.resize(n, 1.0);
-        smoothing::solve_density_and_h_weighted(sys, Some(&self.ones), true);
-        let t0 = std::time::Instant::now();
         let g1 = self.gamma - 1.0;
-        let k = sys.kernel;
-        // (ρ, P, n, ∂P/∂h, ∂n/∂h), self terms first
-        let mut sums: Vec<[f64; 5]> = {
+        // (m_j, (γ−1) m_j u_j): ρ, P and ∂P/∂h ride on the h solve's last kernel values
+        let weights: Vec<[f64; 2]> = {
             let p = &sys.particles;
             (0..n)
-                .map(|i| {
-                    let (w0, dw0) = (k.w0(p.h[i]), k.dwdh0(p.h[i]));
-                    let mu = g1 * p.mass[i] * p.u[i];
-                    [p.mass[i] * w0, mu * w0, w0, mu * dw0, dw0]
-                })
+                .map(|j| [p.mass[j], g1 * p.mass[j] * p.u[j]])
                 .collect()
         };
-        {
-            let p = &sys.particles;
-            sys.gather(&mut sums, |i, s, pr| {
-                let j = pr.b;
-                let e = k.eval(pr.r, p.h[i]);
-                let mu = g1 * p.mass[j] * p.u[j];
-                s[0] += p.mass[j] * e.w;
-                s[1] += mu * e.w;
-                s[2] += e.w;
-                s[3] += mu * e.dwdh;
-                s[4] += e.dwdh;
-            });
-        }
+        let sums = smoothing::solve_density_and_h_with_sums(sys, Some(&self.ones), true, &weights);
+        let t0 = std::time::Instant::now();
         let d = D as f64;
         let gamma = self.gamma;
         let p = &mut sys.particles;
         self.fcoef.resize(n, 0.0);
         for (i, s) in sums.iter().enumerate() {
-            let [rho, pres, num, dp_dh, dn_dh] = *s;
+            let [rho, pres, _, dp_dh] = *s;
+            // n is the solve's κ (X = 1: ρ_solve = m κ), and 1 + (h/(ν n)) ∂n/∂h its Ω
+            let (num, omega) = (p.rho[i] / p.mass[i], p.omega[i]);
             p.rho[i] = rho;
             p.pressure[i] = pres;
             p.sound_speed[i] = (gamma * pres.max(0.0) / rho).sqrt();
             let h = p.h[i];
             // G.7: f_ij = 1 − [h/(ν(γ−1) n m_j u_j)] ∂P/∂h [1 + (h/(ν n)) ∂n/∂h]⁻¹
-            self.fcoef[i] = h * dp_dh / (d * g1 * num) / (1.0 + h / (d * num) * dn_dh);
+            self.fcoef[i] = h * dp_dh / (d * g1 * num) / omega;
         }
         sys.stats.total_pairs += sys.neighbours.total_pairs() as u64;
         sys.stats.seconds_density += t0.elapsed().as_secs_f64();

@@ -26,6 +26,8 @@ struct HSolve {
     /// h wanted to grow beyond the current list's reach.
     needs_rebuild: bool,
     capped: bool,
+    /// The sums of [`solve_density_and_h_with_sums`] at the final h.
+    sums: [f64; 4],
 }
 
 /// Make the neighbour lists valid, solve h and ρ for every particle (X = m), compute Ω, then
@@ -41,6 +43,35 @@ pub fn solve_density_and_h_weighted<const D: usize>(
     sys: &mut System<D>,
     weights: Option<&[f64]>,
     compact: bool,
+) {
+    solve(sys, weights, compact, None);
+}
+
+/// As [`solve_density_and_h_weighted`], and per particle a the sums, at a's final h and over
+/// the same neighbours (self included), Σ_b y_b W_ab(h_a) and Σ_b y_b ∂W_ab(h_a)/∂h_a for the
+/// two weights y = `extra[b][0]` and `extra[b][1]`: [Σ y0 W, Σ y1 W, Σ y0 ∂W/∂h, Σ y1 ∂W/∂h].
+/// They reuse the kernel values of the solve's last Newton step, where a gather after the
+/// solve evaluated every pair's kernel again (PSPH's ρ, P and ∂P/∂h, Frontiere, Raskin & Owen
+/// (2017) eqs G.1–G.2 and G.7). Listed pairs beyond the support add exact zeros, so the sums
+/// are those over the working list, in its order.
+pub fn solve_density_and_h_with_sums<const D: usize>(
+    sys: &mut System<D>,
+    weights: Option<&[f64]>,
+    compact: bool,
+    extra: &[[f64; 2]],
+) -> Vec<[f64; 4]> {
+    let mut sums = vec![[0.0; 4]; sys.particles.len()];
+    solve(sys, weights, compact, Some((extra, &mut sums)));
+    sums
+}
+
+type ExtraSums<'a> = Option<(&'a [[f64; 2]], &'a mut Vec<[f64; 4]>)>;
+
+fn solve<const D: usize>(
+    sys: &mut System<D>,
+    weights: Option<&[f64]>,
+    compact: bool,
+    mut extra: ExtraSums<'_>,
 ) {
     let mut rounds = 0;
     let mut iters = 0u64;
@@ -64,6 +95,7 @@ pub fn solve_density_and_h_weighted<const D: usize>(
                 pending: &pending,
                 start_h: &start_h,
                 h_allowed: &h_allowed,
+                extra: extra.as_ref().map(|e| e.0),
             })
         };
         sys.stats.seconds_density += t0.elapsed().as_secs_f64();
@@ -84,6 +116,9 @@ pub fn solve_density_and_h_weighted<const D: usize>(
                 p.h[a] = r.h;
                 p.rho[a] = r.rho;
                 p.omega[a] = r.omega;
+                if let Some((_, sums)) = &mut extra {
+                    sums[a] = r.sums;
+                }
             }
         }
         sys.stats.h_capped = capped;
@@ -127,6 +162,7 @@ struct SolvePass<'a, const D: usize> {
     pending: &'a [u32],
     start_h: &'a [f64],
     h_allowed: &'a [f64],
+    extra: Option<&'a [[f64; 2]]>,
 }
 
 impl<const D: usize> KernelVisitor<D> for SolvePass<'_, D> {
@@ -151,7 +187,7 @@ impl<const D: usize, K: Kernel + Copy> RowPass for SolveRows<'_, D, K> {
     fn row(&self, i: usize, out: &mut HSolve, lanes: &mut KappaLanes) {
         let v = self.v;
         let a = v.pending[i] as usize;
-        lanes.fill(v.sys, v.x, a);
+        lanes.fill(v.sys, v.x, v.extra, a);
         let xa = v.x[a];
         let kappa = KappaOf {
             lanes,
@@ -159,6 +195,9 @@ impl<const D: usize, K: Kernel + Copy> RowPass for SolveRows<'_, D, K> {
             xa,
         };
         *out = solve_one(v.sys, xa, a, v.start_h[a], v.h_allowed[a], kappa);
+        if let Some(y) = v.extra {
+            out.sums = lanes.extra_sums(self.kernel, y[a], out.h);
+        }
     }
 }
 
@@ -185,19 +224,29 @@ struct KappaLanes {
     r2: Vec<f64>,
     r: Vec<f64>,
     x: Vec<f64>,
+    /// the two extra weights of [`solve_density_and_h_with_sums`], when asked for
+    y: Vec<[f64; 2]>,
+    /// w(q_b) and D w + q w' (q_b) at the last h κ was taken at (0 beyond the support)
     tw: Vec<f64>,
     th: Vec<f64>,
 }
 
 impl KappaLanes {
     #[inline(always)]
-    fn fill<const D: usize>(&mut self, sys: &System<D>, x: &[f64], a: usize) {
+    fn fill<const D: usize>(
+        &mut self,
+        sys: &System<D>,
+        x: &[f64],
+        extra: Option<&[[f64; 2]]>,
+        a: usize,
+    ) {
         let p = &sys.particles;
         let xa = p.pos[a];
         let row = sys.verlet.list.of(a);
         for v in [&mut self.r2, &mut self.r, &mut self.x] {
             v.clear();
         }
+        self.y.clear();
         for &e in row {
             let (b, code) = unpack(e);
             let r2 = sys.domain.separation(&xa, &p.pos[b], code).norm_squared();
@@ -205,16 +254,48 @@ impl KappaLanes {
             self.r.push(r2.sqrt());
             self.x.push(x[b]);
         }
+        if let Some(y) = extra {
+            self.y.extend(row.iter().map(|&e| y[unpack(e).0]));
+        }
         self.tw.resize(row.len(), 0.0);
         self.th.resize(row.len(), 0.0);
+    }
+
+    /// [Σ y0 W, Σ y1 W, Σ y0 ∂W/∂h, Σ y1 ∂W/∂h] (self first, then the list in order) from
+    /// the kernel lanes of the last κ, which was taken at `h` (see `solve_one`).
+    #[inline(always)]
+    fn extra_sums<const D: usize, K: Kernel + Copy>(
+        &self,
+        k: &DimKernel<D, K>,
+        ya: [f64; 2],
+        h: f64,
+    ) -> [f64; 4] {
+        let hinv = 1.0 / h;
+        let (w0, _) = k.kernel.shape(0.0);
+        let dim = D as f64;
+        let mut s = [ya[0] * w0, ya[1] * w0, ya[0] * dim * w0, ya[1] * dim * w0];
+        for ((y, tw), th) in self.y.iter().zip(&self.tw).zip(&self.th) {
+            s[0] += y[0] * tw;
+            s[1] += y[1] * tw;
+            s[2] += y[0] * th;
+            s[3] += y[1] * th;
+        }
+        let norm = k.norm(hinv);
+        [
+            norm * s[0],
+            norm * s[1],
+            -norm * hinv * s[2],
+            -norm * hinv * s[3],
+        ]
     }
 
     /// κ(h) = Σ X_b W_ab(h) and ∂κ/∂h over a's listed neighbours (+ self).
     ///
     /// Written for the pair loop's cost (this is most of the h–ρ solve): with W = σ/h^D w(q)
     /// and ∂W/∂h = −σ/h^{D+1} [D w + q w'], the factors σ/h^D and 1/h are the same for every
-    /// neighbour, so the lanes hold only X_b w(q_b) and X_b [D w + q w'](q_b) with q = r·(1/h)
-    /// (a multiply, not a division). Entries beyond the support (the skin and the scatter
+    /// neighbour, so the lanes hold only w(q_b) and [D w + q w'](q_b) with q = r·(1/h) (a
+    /// multiply, not a division), weighted by X_b in the sum (and kept for
+    /// [`Self::extra_sums`]). Entries beyond the support (the skin and the scatter
     /// neighbours) give exact zeros, and the sum runs in list order, so κ is the same to the
     /// bit as a loop that skips them, whatever the list's skin.
     #[inline(always)]
@@ -235,15 +316,14 @@ impl KappaLanes {
             support2,
             &self.r2,
             &self.r,
-            &self.x,
             &mut self.tw,
             &mut self.th,
         );
         let mut sum_w = xa * w0;
         let mut sum_h = xa * dim * w0;
-        for (tw, th) in self.tw.iter().zip(&self.th) {
-            sum_w += tw;
-            sum_h += th;
+        for ((x, tw), th) in self.x.iter().zip(&self.tw).zip(&self.th) {
+            sum_w += x * tw;
+            sum_h += x * th;
         }
         let norm = k.norm(hinv);
         (norm * sum_w, -norm * hinv * sum_h)
@@ -261,22 +341,17 @@ fn kappa_terms<K: Kernel>(
     support2: f64,
     r2: &[f64],
     r: &[f64],
-    x: &[f64],
     tw: &mut [f64],
     th: &mut [f64],
 ) {
     let n = r2.len();
-    let (r, x, tw, th) = (&r[..n], &x[..n], &mut tw[..n], &mut th[..n]);
+    let (r, tw, th) = (&r[..n], &mut tw[..n], &mut th[..n]);
     for i in 0..n {
         let q = r[i] * hinv;
         let (w, dw) = kernel.shape(q);
         let inside = r2[i] < support2;
-        tw[i] = if inside { x[i] * w } else { 0.0 };
-        th[i] = if inside {
-            x[i] * (dim * w + q * dw)
-        } else {
-            0.0
-        };
+        tw[i] = if inside { w } else { 0.0 };
+        th[i] = if inside { dim * w + q * dw } else { 0.0 };
     }
 }
 
@@ -311,6 +386,7 @@ fn solve_one<const D: usize, K: Kernel + Copy>(
             iterations: it as u32,
             needs_rebuild,
             capped,
+            sums: [0.0; 4],
         };
     if sys.particles.body[a] != 0 || sys.particles.port[a] != 0 || h0_beyond_list {
         let (kappa, dkappa) = kappa_of.at(h);
