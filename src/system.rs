@@ -179,8 +179,7 @@ impl<const D: usize> System<D> {
     /// shocks of a periodic Sod tube, keep u near 0 and gain nothing from it, so once that
     /// bound has run out each particle also gets the local bound of [`slack`] (u chosen per
     /// neighbourhood), and the smaller of the two is s_a: listed while `R_a + s_a ≤ Rb_a`.
-    /// The list is rebuilt
-    /// (reach 2h(1+skin)) when `rebuild` is set or no slack is left.
+    /// The list is rebuilt (reach 2h(1+skin)) when `rebuild` is set or no slack is left.
     pub fn prepare_master_list(&mut self, skin: f64, mut rebuild: bool) -> Vec<f64> {
         let t0 = std::time::Instant::now();
         let n = self.particles.len();
@@ -188,7 +187,7 @@ impl<const D: usize> System<D> {
         if v.pos.len() != n || v.list.offsets.len() != n + 1 {
             rebuild = true;
         }
-        // Displacement of each particle since the build relative to u, and the largest one.
+        // s_a per particle: the bound on |d_a − d_b| over a's partners (0 after a build).
         let mut disp = vec![0.0; n];
         if !rebuild {
             let dom = &self.domain;

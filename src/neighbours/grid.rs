@@ -273,20 +273,8 @@ impl<const D: usize> CellGrid<D> {
                     self.visit_run(base, first, last, &sh, &mut f);
                 }
             }
-            if D == 1 {
+            if !next_index(&mut idx, &counts, 1) {
                 return;
-            }
-            let mut k = 1;
-            loop {
-                idx[k] += 1;
-                if idx[k] < counts[k] {
-                    break;
-                }
-                idx[k] = 0;
-                k += 1;
-                if k == D {
-                    return;
-                }
             }
         }
     }
@@ -307,6 +295,24 @@ impl<const D: usize> CellGrid<D> {
             f(s, e, sh);
         }
     }
+}
+
+/// Step the multi-index `idx` (digit k in 0..len[k]) to the next one over the axes from
+/// `from` up, lowest axis first; false once every combination was visited.
+#[inline(always)]
+pub(super) fn next_index<const D: usize>(
+    idx: &mut [usize; D],
+    len: &[usize; D],
+    from: usize,
+) -> bool {
+    for k in from..D {
+        idx[k] += 1;
+        if idx[k] < len[k] {
+            return true;
+        }
+        idx[k] = 0;
+    }
+    false
 }
 
 impl<const D: usize> CellGrid<D> {

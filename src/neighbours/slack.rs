@@ -20,6 +20,7 @@
 //! Where the flow moves as a whole (a post-shock plateau, a sloshing tank's bulk), N_a is
 //! small whatever the speed.
 
+use super::grid::next_index;
 use crate::domain::{BoundaryKind, Domain};
 use crate::particles::Vector;
 use crate::threads::LIGHT;
@@ -209,17 +210,8 @@ impl<const D: usize> Coarse<D> {
                 m = m * self.dims[k] + axis[k][pick[k]];
             }
             f(m);
-            let mut k = 0;
-            loop {
-                pick[k] += 1;
-                if pick[k] < len[k] {
-                    break;
-                }
-                pick[k] = 0;
-                k += 1;
-                if k == D {
-                    return;
-                }
+            if !next_index(&mut pick, &len, 0) {
+                return;
             }
         }
     }

@@ -122,7 +122,7 @@ impl<const D: usize> Psph<D> {
             // G.7: f_ij = 1 − [h/(ν(γ−1) n m_j u_j)] ∂P/∂h [1 + (h/(ν n)) ∂n/∂h]⁻¹
             self.fcoef[i] = h * dp_dh / (d * g1 * num) / omega;
         }
-        sys.stats.total_pairs += sys.neighbours.total_pairs() as u64;
+        // (no pair pass here: the h solve counted its pairs)
         sys.stats.seconds_density += t0.elapsed().as_secs_f64();
         sys.apply_boundary_conditions();
     }
