@@ -178,12 +178,12 @@ impl<const D: usize> Coarse<D> {
     /// Visit the cells within one cell of cell `c` along every axis (wrapping periodic axes,
     /// each cell once).
     fn for_adjacent(&self, c: usize, mut f: impl FnMut(usize)) {
-        let mut idx = [0usize; D];
         let mut rest = c;
-        for k in 0..D {
-            idx[k] = rest % self.dims[k];
+        let idx: [usize; D] = std::array::from_fn(|k| {
+            let i = rest % self.dims[k];
             rest /= self.dims[k];
-        }
+            i
+        });
         // per axis: the distinct cell indices among idx − 1, idx, idx + 1
         let mut axis: [[usize; 3]; D] = [[0; 3]; D];
         let mut len = [0usize; D];
