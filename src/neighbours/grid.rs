@@ -64,26 +64,7 @@ impl<const D: usize> CellGrid<D> {
         };
         let cell_size = (0.5 * median).max(rmax / MAX_SPAN as f64);
         let n = pos.len();
-        let mut lo = [f64::INFINITY; D];
-        let mut hi = [f64::NEG_INFINITY; D];
-        for x in pos {
-            for k in 0..D {
-                lo[k] = lo[k].min(x[k]);
-                hi[k] = hi[k].max(x[k]);
-            }
-        }
-        let mut periodic = [false; D];
-        for k in 0..D {
-            if domain.kind[k] == BoundaryKind::Periodic {
-                lo[k] = domain.lo[k];
-                hi[k] = domain.hi[k];
-                periodic[k] = true;
-            }
-            if n == 0 {
-                lo[k] = 0.0;
-                hi[k] = 1.0;
-            }
-        }
+        let (lo, hi, periodic) = cell_box(pos, domain);
         // Cap the cell count at ~2 cells per particle (sparse or far-flung particles).
         let mut cell = cell_size.max(1e-300);
         loop {
@@ -95,19 +76,9 @@ impl<const D: usize> CellGrid<D> {
             }
             cell *= 1.25;
         }
-        let mut dims = [1usize; D];
-        let mut width = [cell; D];
-        let mut period = [0.0; D];
-        for k in 0..D {
-            if periodic[k] {
-                period[k] = hi[k] - lo[k];
-                // An integer number of cells exactly tiling the period, each ≥ cell.
-                dims[k] = ((hi[k] - lo[k]) / cell).floor().max(1.0) as usize;
-                width[k] = (hi[k] - lo[k]) / dims[k] as f64;
-            } else {
-                dims[k] = (((hi[k] - lo[k]) / cell).floor() as usize + 1).max(1);
-            }
-        }
+        let (dims, width) = tile(&lo, &hi, &periodic, cell);
+        let period: [f64; D] =
+            std::array::from_fn(|k| if periodic[k] { hi[k] - lo[k] } else { 0.0 });
         let mut grid = Self {
             origin: lo,
             width,
@@ -295,6 +266,54 @@ impl<const D: usize> CellGrid<D> {
             f(s, e, sh);
         }
     }
+}
+
+/// The box a grid of cells covers, and which axes are periodic: the particles' bounding box,
+/// the domain itself on periodic axes (which the cells tile exactly), [0, 1] without
+/// particles.
+pub(super) fn cell_box<const D: usize>(
+    pos: &[Vector<D>],
+    domain: &Domain<D>,
+) -> ([f64; D], [f64; D], [bool; D]) {
+    let mut lo = [f64::INFINITY; D];
+    let mut hi = [f64::NEG_INFINITY; D];
+    for x in pos {
+        for k in 0..D {
+            lo[k] = lo[k].min(x[k]);
+            hi[k] = hi[k].max(x[k]);
+        }
+    }
+    let periodic: [bool; D] = std::array::from_fn(|k| domain.kind[k] == BoundaryKind::Periodic);
+    for k in 0..D {
+        if periodic[k] {
+            (lo[k], hi[k]) = (domain.lo[k], domain.hi[k]);
+        }
+        if pos.is_empty() {
+            (lo[k], hi[k]) = (0.0, 1.0);
+        }
+    }
+    (lo, hi, periodic)
+}
+
+/// Cell counts and widths per axis for cells at least `cell` wide over [lo, hi]: an integer
+/// number exactly tiling the period on periodic axes, elsewhere as many as reach past hi.
+pub(super) fn tile<const D: usize>(
+    lo: &[f64; D],
+    hi: &[f64; D],
+    periodic: &[bool; D],
+    cell: f64,
+) -> ([usize; D], [f64; D]) {
+    let mut dims = [1usize; D];
+    let mut width = [cell; D];
+    for k in 0..D {
+        if periodic[k] {
+            dims[k] = ((hi[k] - lo[k]) / cell).floor().max(1.0) as usize;
+            width[k] = (hi[k] - lo[k]) / dims[k] as f64;
+        } else {
+            dims[k] = (((hi[k] - lo[k]) / cell).floor() as usize + 1).max(1);
+        }
+    }
+    (dims, width)
 }
 
 /// Step the multi-index `idx` (digit k in 0..len[k]) to the next one over the axes from

@@ -20,7 +20,7 @@
 //! Where the flow moves as a whole (a post-shock plateau, a sloshing tank's bulk), N_a is
 //! small whatever the speed.
 
-use super::grid::next_index;
+use super::grid::{cell_box, next_index, tile};
 use crate::domain::{BoundaryKind, Domain};
 use crate::particles::Vector;
 use crate::threads::LIGHT;
@@ -112,20 +112,7 @@ struct Coarse<const D: usize> {
 
 impl<const D: usize> Coarse<D> {
     fn new(pos: &[Vector<D>], reach: f64, domain: &Domain<D>) -> Self {
-        let mut lo = [f64::INFINITY; D];
-        let mut hi = [f64::NEG_INFINITY; D];
-        for x in pos {
-            for k in 0..D {
-                lo[k] = lo[k].min(x[k]);
-                hi[k] = hi[k].max(x[k]);
-            }
-        }
-        let periodic: [bool; D] = std::array::from_fn(|k| domain.kind[k] == BoundaryKind::Periodic);
-        for k in 0..D {
-            if periodic[k] {
-                (lo[k], hi[k]) = (domain.lo[k], domain.hi[k]);
-            }
-        }
+        let (lo, hi, periodic) = cell_box(pos, domain);
         // At most ~one cell per particle (far-flung particles in an open box): wider cells
         // only loosen the bound.
         let mut w = reach.max(1e-300);
@@ -137,16 +124,7 @@ impl<const D: usize> Coarse<D> {
         while count(w) > pos.len() as f64 + 8.0 {
             w *= 1.5;
         }
-        let mut dims = [1usize; D];
-        let mut width = [w; D];
-        for k in 0..D {
-            if periodic[k] {
-                dims[k] = ((hi[k] - lo[k]) / w).floor().max(1.0) as usize;
-                width[k] = (hi[k] - lo[k]) / dims[k] as f64;
-            } else {
-                dims[k] = ((hi[k] - lo[k]) / w).floor() as usize + 1;
-            }
-        }
+        let (dims, width) = tile(&lo, &hi, &periodic, w);
         Self {
             lo,
             width,
