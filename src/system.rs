@@ -407,14 +407,7 @@ impl<const D: usize> System<D> {
         F: Fn(usize, &mut T, &mut Q, &Pair<D>) + Sync,
     {
         let nb = &self.neighbours;
-        assert_eq!(per_pair.len(), nb.total_pairs(), "one slot per listed pair");
-        let mut slices: Vec<&mut [Q]> = Vec::with_capacity(out.len());
-        let mut rest = per_pair;
-        for a in 0..out.len() {
-            let (head, tail) = rest.split_at_mut(nb.of(a).len());
-            slices.push(head);
-            rest = tail;
-        }
+        let slices = nb.split_rows_mut(per_pair);
         let dom = &self.domain;
         let p = &self.particles;
         out.par_iter_mut()

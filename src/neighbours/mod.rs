@@ -51,6 +51,23 @@ impl NeighbourList {
         self.entries.len()
     }
 
+    /// `per_pair` (one slot per listed pair, in list order) cut into one slice per row.
+    pub fn split_rows_mut<'a, Q>(&self, per_pair: &'a mut [Q]) -> Vec<&'a mut [Q]> {
+        assert_eq!(
+            per_pair.len(),
+            self.total_pairs(),
+            "one slot per listed pair"
+        );
+        let mut rows = Vec::with_capacity(self.offsets.len().saturating_sub(1));
+        let mut rest = per_pair;
+        for w in self.offsets.windows(2) {
+            let (head, tail) = rest.split_at_mut(w[1] - w[0]);
+            rows.push(head);
+            rest = tail;
+        }
+        rows
+    }
+
     /// Whether these lists (from a saved state) fit `n` particles: empty (built anew by the
     /// next evaluation), or offsets for every particle, increasing to the entry count, and
     /// every entry naming a particle and an image code the domain has.

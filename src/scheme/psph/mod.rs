@@ -22,12 +22,13 @@
 
 use super::compatible::PairWork;
 use super::cullen::{CullenDehnen, CullenParams};
-use super::paper_step::{self, PairSums};
+use super::paper_step;
 use super::standard::{check_above, check_range};
 use super::{smoothing, Scheme, SchemeError};
 use crate::system::System;
-use nalgebra::SMatrix;
 use serde::{Deserialize, Serialize};
+
+mod force;
 
 /// Parameters of `[scheme] name = "psph"`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -156,80 +157,16 @@ impl<const D: usize> Scheme<D> for Psph<D> {
             cd.measure(sys);
         }
         let t0 = std::time::Instant::now();
-        let n = sys.particles.len();
-        let mut out = vec![PairSums::<D>::default(); n];
-        let g1 = self.gamma - 1.0;
-        let alpha_c = self.params.conductivity;
         let mut work = std::mem::take(&mut self.work);
         work.reset(sys);
-        {
-            let p = &sys.particles;
-            let k = &sys.kernel;
-            let fc = &self.fcoef;
-            let base = self.visc;
-            let zero = SMatrix::<f64, D, D>::zeros();
-            let f = |i: usize, j: usize| {
-                let mu = p.mass[j] * p.u[j];
-                if mu > 0.0 {
-                    1.0 - fc[i] / mu
-                } else {
-                    1.0
-                }
-            };
-            sys.gather_pairs(&mut out, &mut work.acc, |i, o, slot, pr| {
-                if pr.r <= 0.0 || sys.wall_pair(i, pr.b) {
-                    return;
-                }
-                let j = pr.b;
-                let rhat = pr.dx / pr.r;
-                let gi = rhat * k.dwdr(pr.r, p.h[i]);
-                let gj = rhat * k.dwdr(pr.r, p.h[j]);
-                let vij = p.vel[i] - pr.vb;
-                let uu = g1 * g1 * p.u[i] * p.u[j];
-                // P = 0 (cold gas) has no pressure force: f/P → 0 rather than 0/0
-                let inv = |x: f64| if x > 0.0 { 1.0 / x } else { 0.0 };
-                let (fi, fj) = (f(i, j) * inv(p.pressure[i]), f(j, i) * inv(p.pressure[j]));
-                let mut visc = base;
-                let a = 0.5 * (p.alpha[i] + p.alpha[j]);
-                visc.c_l *= a;
-                visc.c_q *= a;
-                let (qi, qj) = super::crksph::viscosity::pair_q(
-                    &visc,
-                    &pr.dx,
-                    &vij,
-                    &zero,
-                    &zero,
-                    (p.h[i], p.rho[i], p.sound_speed[i]),
-                    (p.h[j], p.rho[j], p.sound_speed[j]),
-                );
-                let gsum = gi + gj;
-                let rho_sum = p.rho[i] + p.rho[j];
-                let q = gsum * (0.5 * (qi / p.rho[i] + qj / p.rho[j]) / rho_sum);
-                let m_j = p.mass[j];
-                let a_ij = -(gi * (uu * fi) + gj * (uu * fj) + q) * m_j;
-                *slot = a_ij;
-                o.acc += a_ij;
-                o.dudt += m_j * (uu * fi * vij.dot(&gi) + 0.5 * vij.dot(&q));
-                let w = vij.dot(&rhat);
-                let vs = p.sound_speed[i] + p.sound_speed[j] - 3.0 * w;
-                let psum = p.pressure[i] + p.pressure[j];
-                if alpha_c > 0.0 && vs > 0.0 && psum > 0.0 {
-                    o.exchange += alpha_c
-                        * m_j
-                        * a
-                        * vs
-                        * (p.u[i] - p.u[j])
-                        * ((p.pressure[i] - p.pressure[j]).abs() / psum)
-                        * rhat.dot(&gsum)
-                        / rho_sum;
-                }
-                o.q_max = o.q_max.max(qi);
-                o.approach = o.approach.max(-w);
-            });
+        let out = force::PsphForce {
+            sys,
+            fcoef: &self.fcoef,
+            gamma: self.gamma,
+            visc: self.visc,
+            alpha_c: self.params.conductivity,
         }
-        for o in out.iter_mut() {
-            o.dudt += o.exchange;
-        }
+        .run(&mut work.acc);
         work.exchange = out.iter().map(|o| o.exchange).collect();
         self.work = work;
         paper_step::store(sys, t0, &out);
