@@ -300,6 +300,16 @@ impl<const D: usize, K: Kernel + Copy> DimKernel<D, K> {
         self.sigma * Self::hinv_pow(h) * hinv * self.kernel.shape(q).1
     }
 
+    /// W(r, h) with a precomputed 1/h (no division in the pair loop).
+    #[inline(always)]
+    pub fn w_hinv(&self, r: f64, hinv: f64) -> f64 {
+        let q = r * hinv;
+        if q >= SUPPORT {
+            return 0.0;
+        }
+        self.norm(hinv) * self.kernel.shape(q).0
+    }
+
     /// ∂W/∂r with a precomputed 1/h (no division in the pair loop).
     #[inline(always)]
     pub fn dwdr_hinv(&self, r: f64, hinv: f64) -> f64 {

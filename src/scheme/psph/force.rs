@@ -243,12 +243,12 @@ impl<'s, const D: usize, K: Kernel + Copy> RowPass for Rows<'_, 's, D, K> {
             }
             self.terms(ra, blk, t, lanes);
             // Sum in list order; keep each a_ij.
-            for i in 0..n {
+            for (i, slot) in slots.iter_mut().enumerate() {
                 let mut a_ij = Vector::<D>::zeros();
                 for k in 0..D {
                     a_ij[k] = t.s[i] * blk.dx[k][i];
                 }
-                slots[i] = a_ij;
+                *slot = a_ij;
                 sums.acc += a_ij;
                 sums.dudt += t.dudt[i];
                 sums.exchange += t.exchange[i];

@@ -13,9 +13,15 @@
 //!
 //! ∇v is the linearly corrected SPH gradient (E.4 with E.6), exact for linear fields.
 
+use crate::kernel::{DimKernel, Kernel, KernelVisitor};
+use crate::neighbours::lanes::for_each_row;
 use crate::system::System;
+use crate::threads::LIGHT;
+use measure::{GradientRecord, GradientRows, GradientSums, XiRows};
 use nalgebra::SMatrix;
 use rayon::prelude::*;
+
+mod measure;
 
 /// Constants of the switch (Frontiere, Raskin & Owen (2017) App F, [P]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -74,68 +80,8 @@ impl CullenDehnen {
     /// v_sig. Needs ρ, h and c of the current state.
     pub fn measure<const D: usize>(&self, sys: &mut System<D>) {
         let t0 = std::time::Instant::now();
-        let n = sys.particles.len();
-        let mut sums = vec![(SMatrix::<f64, D, D>::zeros(), SMatrix::<f64, D, D>::zeros()); n];
-        {
-            let p = &sys.particles;
-            let k = &sys.kernel;
-            sys.gather(&mut sums, |i, s, pr| {
-                if pr.r <= 0.0 {
-                    return;
-                }
-                let gw = pr.dx * (k.dwdr(pr.r, p.h[i]) / pr.r);
-                let m = p.mass[pr.b];
-                s.0 += (p.vel[i] - pr.vb) * gw.transpose() * m;
-                s.1 += pr.dx * gw.transpose() * m;
-            });
-        }
-        let grads: Vec<SMatrix<f64, D, D>> = (0..n)
-            .into_par_iter()
-            .map(|i| {
-                let (v, m) = &sums[i];
-                // E.6 makes E.4 exact for linear v; fall back to the plain estimate when M is
-                // near-singular (Spheral: |det M| > 1e-10)
-                match super::rosswog::gradients::invert(m) {
-                    Some(minv) => v * minv,
-                    None => -v / sys.particles.rho[i],
-                }
-            })
-            .collect();
-        {
-            let p = &mut sys.particles;
-            let d = D as f64;
-            for (i, g) in grads.iter().enumerate() {
-                let div = g.trace();
-                p.div_v[i] = div;
-                p.curl_v[i] = super::standard::curl_norm(g);
-                let s = (g + g.transpose()) * 0.5 - SMatrix::<f64, D, D>::identity() * (div / d);
-                p.extra_scalars[self.shear2][i] = (s * s).trace();
-            }
-        }
-        let mut xv = vec![(0.0, 0.0); n];
-        {
-            let p = &sys.particles;
-            let k = &sys.kernel;
-            sys.gather(&mut xv, |i, o, pr| {
-                let j = pr.b;
-                o.0 += p.div_v[j].signum() * p.mass[j] * k.w(pr.r, p.h[i]);
-                let w = if pr.r > 0.0 {
-                    (p.vel[i] - pr.vb).dot(&pr.dx) / pr.r
-                } else {
-                    0.0
-                };
-                o.1 = f64::max(
-                    o.1,
-                    0.5 * (p.sound_speed[i] + p.sound_speed[j]) - w.min(0.0),
-                );
-            });
-        }
-        let p = &mut sys.particles;
-        for (i, (sum, vs)) in xv.into_iter().enumerate() {
-            let self_term = p.div_v[i].signum() * p.mass[i] * sys.kernel.w0(p.h[i]);
-            p.extra_scalars[self.xi][i] = 1.0 - (sum + self_term) / p.rho[i];
-            p.extra_scalars[self.vsig][i] = vs.max(p.sound_speed[i]);
-        }
+        let kernel = sys.kernel;
+        kernel.visit(Measure { cd: self, sys });
         sys.stats.total_pairs += 2 * sys.neighbours.total_pairs() as u64;
         sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
     }
@@ -173,6 +119,86 @@ impl CullenDehnen {
             let s2 = p.extra_scalars[self.shear2][i];
             let limiter = if x + s2 > 0.0 { x / (x + s2) } else { 1.0 };
             p.alpha[i] = (a0_new * limiter).max(c.alpha_min);
+        }
+    }
+}
+
+/// [`CullenDehnen::measure`] with the concrete kernel.
+struct Measure<'a, const D: usize> {
+    cd: &'a CullenDehnen,
+    sys: &'a mut System<D>,
+}
+
+impl<const D: usize> KernelVisitor<D> for Measure<'_, D> {
+    type Output = ();
+    fn visit<K: Kernel + Copy>(self, kernel: &DimKernel<D, K>) {
+        let (cd, sys) = (self.cd, self.sys);
+        let n = sys.particles.len();
+        let p = &sys.particles;
+        let hinv: Vec<f64> =
+            p.h.par_iter()
+                .with_min_len(LIGHT)
+                .map(|h| 1.0 / h)
+                .collect();
+        let recs: Vec<GradientRecord<D>> = (0..n)
+            .into_par_iter()
+            .with_min_len(LIGHT)
+            .map(|a| GradientRecord {
+                x: p.pos[a],
+                v: p.vel[a],
+                m: p.mass[a],
+                c: p.sound_speed[a],
+                hinv: hinv[a],
+            })
+            .collect();
+        let mut sums = vec![GradientSums::<D>::default(); n];
+        let rows = GradientRows {
+            sys,
+            recs: &recs,
+            kernel: *kernel,
+        };
+        for_each_row(&rows, &mut sums);
+        let grads: Vec<SMatrix<f64, D, D>> = sums
+            .par_iter()
+            .enumerate()
+            .with_min_len(LIGHT)
+            .map(|(i, s)| {
+                // E.6 makes E.4 exact for linear v. M = Σ m x ⊗ ∇W is negative definite
+                // (∂W/∂r ≤ 0), so invert −M and flip the sign; fall back to the plain estimate
+                // when M is near-singular (Spheral: |det M| > 1e-10)
+                match super::rosswog::gradients::invert(&-s.m) {
+                    Some(minv) => -(s.v * minv),
+                    None => -s.v / p.rho[i],
+                }
+            })
+            .collect();
+        {
+            let p = &mut sys.particles;
+            let d = D as f64;
+            for (i, g) in grads.iter().enumerate() {
+                let div = g.trace();
+                p.div_v[i] = div;
+                p.curl_v[i] = super::standard::curl_norm(g);
+                let s = (g + g.transpose()) * 0.5 - SMatrix::<f64, D, D>::identity() * (div / d);
+                p.extra_scalars[cd.shear2][i] = (s * s).trace();
+            }
+        }
+        let p = &sys.particles;
+        let weight: Vec<f64> = (0..n).map(|j| p.div_v[j].signum() * p.mass[j]).collect();
+        let mut xi = vec![0.0; n];
+        let rows = XiRows {
+            sys,
+            x: &p.pos,
+            weight: &weight,
+            hinv: &hinv,
+            kernel: *kernel,
+        };
+        for_each_row(&rows, &mut xi);
+        let p = &mut sys.particles;
+        for i in 0..n {
+            let self_term = weight[i] * kernel.w0(p.h[i]);
+            p.extra_scalars[cd.xi][i] = 1.0 - (xi[i] + self_term) / p.rho[i];
+            p.extra_scalars[cd.vsig][i] = sums[i].vsig.max(p.sound_speed[i]);
         }
     }
 }
