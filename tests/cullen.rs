@@ -41,19 +41,7 @@ fn alpha_rises_at_the_sod_shock_and_rests_at_the_floor_ahead_of_it() {
 fn alpha_stays_at_the_floor_in_steady_shear() {
     // v_x = 0.1 sin(2πy): a steady shear layer (∇·v = 0 on the lattice), which the
     // unlimited Monaghan–Gingold viscosity would damp; the switch must not turn on.
-    let text = format!(
-        r#"{header}[scheme]
-name = "compsph-cullen"
-[time]
-t_end = 0.05
-[[region]]
-spacing = 0.03125
-density = 1.0
-pressure = 1.0
-"#,
-        header = common::header(2, 0.0, 1.0, "periodic", 5.0 / 3.0)
-    );
-    let case = Case::parse(&text).unwrap();
+    let case = unit_square_gas("periodic", 0.03125);
     let mut sys = case.system::<2>().unwrap();
     for i in 0..sys.particles.len() {
         let y = sys.particles.pos[i][1];
@@ -72,19 +60,7 @@ fn the_switch_measures_the_divergence_of_a_linear_flow_exactly_on_a_disordered_s
     // v = A x on jittered particles: the corrected gradient (E.4 with E.6) is exact for a
     // linear field wherever a particle has its full neighbourhood, while the plain SPH
     // estimate is off by the disorder (measured: 9.9e-2 uncorrected, 6.7e-16 corrected).
-    let text = format!(
-        r#"{header}[scheme]
-name = "compsph-cullen"
-[time]
-t_end = 0.05
-[[region]]
-spacing = 0.05
-density = 1.0
-pressure = 1.0
-"#,
-        header = common::header(2, 0.0, 1.0, "open", 5.0 / 3.0)
-    );
-    let case = Case::parse(&text).unwrap();
+    let case = unit_square_gas("open", 0.05);
     let mut sys = case.system::<2>().unwrap();
     let a = [[0.3, -0.2], [0.5, -0.7]];
     let mut seed = 12345u64;
@@ -119,4 +95,21 @@ pressure = 1.0
     assert!(inside > 50, "{inside} interior particles");
     // round-off of sums of ~20 terms of size |A| (measured 6.7e-16)
     assert!(worst < 1e-12, "∇·v error {worst}");
+}
+
+/// compsph-cullen on a lattice of still gas (ρ = 1, P = 1, γ = 5/3) in the unit square.
+fn unit_square_gas(boundary: &str, spacing: f64) -> Case {
+    let text = format!(
+        r#"{header}[scheme]
+name = "compsph-cullen"
+[time]
+t_end = 0.05
+[[region]]
+spacing = {spacing:?}
+density = 1.0
+pressure = 1.0
+"#,
+        header = common::header(2, 0.0, 1.0, boundary, 5.0 / 3.0)
+    );
+    Case::parse(&text).unwrap()
 }

@@ -49,8 +49,10 @@ pub(super) struct GradientRows<'a, const D: usize, K> {
 }
 
 /// A block's columns and pair terms (index k·3 + l for the (k, l) entry of a matrix).
+#[derive(Default)]
 pub(super) struct GradientScratch(Box<GradientBlock>);
 
+#[derive(Default)]
 struct GradientBlock {
     dx: [[f64; LANES]; 3],
     vab: [[f64; LANES]; 3],
@@ -59,21 +61,6 @@ struct GradientBlock {
     tv: [[f64; LANES]; 9],
     tm: [[f64; LANES]; 9],
     vsig: [f64; LANES],
-}
-
-impl Default for GradientScratch {
-    fn default() -> Self {
-        let z = [0.0; LANES];
-        Self(Box::new(GradientBlock {
-            dx: [z; 3],
-            vab: [z; 3],
-            m: z,
-            c: z,
-            tv: [z; 9],
-            tm: [z; 9],
-            vsig: z,
-        }))
-    }
 }
 
 impl<const D: usize, K: Kernel + Copy> RowPass for GradientRows<'_, D, K> {
@@ -153,13 +140,8 @@ pub(super) struct XiRows<'a, const D: usize, K> {
 }
 
 /// Columns r² and the weight, and the pair terms.
+#[derive(Default)]
 pub(super) struct XiScratch(Box<[[f64; LANES]; 3]>);
-
-impl Default for XiScratch {
-    fn default() -> Self {
-        Self(Box::new([[0.0; LANES]; 3]))
-    }
-}
 
 impl<const D: usize, K: Kernel + Copy> RowPass for XiRows<'_, D, K> {
     type Acc = f64;

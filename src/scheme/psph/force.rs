@@ -138,6 +138,7 @@ struct Rows<'a, 's, const D: usize, K> {
 /// A block of up to [`LANES`] pairs: separation, v_ij and b's fields. Padding lanes get a
 /// zero separation, which marks them as adding nothing; their other fields are stale but
 /// finite (or give NaN that a select drops).
+#[derive(Default)]
 struct PairBlock {
     dx: [[f64; LANES]; 3],
     vab: [[f64; LANES]; 3],
@@ -156,6 +157,7 @@ struct PairBlock {
 }
 
 /// A block's pair terms: a_ij = s·x_ij, du/dt, the conduction exchange, Q_i and −w.
+#[derive(Default)]
 struct PairTerms {
     s: [f64; LANES],
     dudt: [f64; LANES],
@@ -165,37 +167,8 @@ struct PairTerms {
 }
 
 /// A thread's blocks (boxed: about 6 KB).
+#[derive(Default)]
 pub(super) struct Scratch(Box<(PairBlock, PairTerms)>);
-
-impl Default for Scratch {
-    fn default() -> Self {
-        let z = [0.0; LANES];
-        Self(Box::new((
-            PairBlock {
-                dx: [z; 3],
-                vab: [z; 3],
-                hinv: z,
-                m: z,
-                mu_inv: z,
-                fc: z,
-                pinv: z,
-                u: z,
-                rho: z,
-                c: z,
-                p: z,
-                alpha: z,
-                walls: z,
-            },
-            PairTerms {
-                s: z,
-                dudt: z,
-                exchange: z,
-                q: z,
-                approach: z,
-            },
-        )))
-    }
-}
 
 impl<'s, const D: usize, K: Kernel + Copy> RowPass for Rows<'_, 's, D, K> {
     type Acc = RowOut<'s, D>;

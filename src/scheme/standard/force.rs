@@ -208,6 +208,7 @@ struct ForceRows<'a, const D: usize, K, const PLAIN: bool> {
 /// extra terms' fields (filled only when not `PLAIN`). The padding lanes past a block's end
 /// get a zero separation, which marks them, like a pair at zero distance, as adding nothing;
 /// their other fields are left from an earlier block (finite, and never summed).
+#[derive(Default)]
 struct PairBlock {
     dx: [[f64; LANES]; 3],
     vab: [[f64; LANES]; 3],
@@ -230,6 +231,7 @@ struct PairBlock {
 }
 
 /// A block's pair terms.
+#[derive(Default)]
 struct PairTerms {
     acc: [[f64; LANES]; 3],
     dudt: [f64; LANES],
@@ -238,39 +240,8 @@ struct PairTerms {
 }
 
 /// A thread's blocks (boxed: about 8 KB).
+#[derive(Default)]
 pub(super) struct ForceScratch(Box<(PairBlock, PairTerms)>);
-
-impl Default for ForceScratch {
-    fn default() -> Self {
-        let z = [0.0; LANES];
-        let z3 = [z; 3];
-        Self(Box::new((
-            PairBlock {
-                dx: z3,
-                vab: z3,
-                hinv: z,
-                m: z,
-                pstd: z,
-                rho: z,
-                h: z,
-                c: z,
-                alpha: z,
-                bal: z,
-                p: z,
-                u: z,
-                dv: z3,
-                lam: z,
-                wall: z,
-            },
-            PairTerms {
-                acc: z3,
-                dudt: z,
-                vsig: z,
-                drho: z,
-            },
-        )))
-    }
-}
 
 impl<const D: usize, K: Kernel + Copy, const PLAIN: bool> RowPass for ForceRows<'_, D, K, PLAIN> {
     type Acc = ForceAcc<D>;
