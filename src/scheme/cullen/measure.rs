@@ -21,7 +21,6 @@ pub(super) struct GradientRecord<const D: usize> {
     pub v: Vector<D>,
     pub m: f64,
     pub c: f64,
-    pub hinv: f64,
 }
 
 /// One row of the gradient pass: the two matrix sums and v_sig.
@@ -45,6 +44,7 @@ impl<const D: usize> Default for GradientSums<D> {
 pub(super) struct GradientRows<'a, const D: usize, K> {
     pub sys: &'a System<D>,
     pub recs: &'a [GradientRecord<D>],
+    pub hinv: &'a [f64],
     pub kernel: DimKernel<D, K>,
 }
 
@@ -72,7 +72,7 @@ impl<const D: usize, K: Kernel + Copy> RowPass for GradientRows<'_, D, K> {
     fn row(&self, a: usize, o: &mut GradientSums<D>, scratch: &mut GradientScratch) {
         let blk = &mut *scratch.0;
         let dom = &self.sys.domain;
-        let ra = self.recs[a];
+        let (ra, hinv) = (self.recs[a], self.hinv[a]);
         let k = self.kernel;
         let mut sums = GradientSums::<D>::default();
         for block in self.sys.neighbours.of(a).chunks(LANES) {
@@ -101,11 +101,7 @@ impl<const D: usize, K: Kernel + Copy> RowPass for GradientRows<'_, D, K> {
                 // a pair at zero distance has no gradient, but its sound speed counts
                 let valid = r2 > 0.0;
                 let r = if valid { r2.sqrt() } else { 1.0 };
-                let g = if valid {
-                    k.dwdr_hinv(r, ra.hinv) / r
-                } else {
-                    0.0
-                };
+                let g = if valid { k.dwdr_hinv(r, hinv) / r } else { 0.0 };
                 for kk in 0..D {
                     for l in 0..D {
                         let gw = blk.dx[l][i] * g;

@@ -148,13 +148,13 @@ impl<const D: usize> KernelVisitor<D> for Measure<'_, D> {
                 v: p.vel[a],
                 m: p.mass[a],
                 c: p.sound_speed[a],
-                hinv: hinv[a],
             })
             .collect();
         let mut sums = vec![GradientSums::<D>::default(); n];
         let rows = GradientRows {
             sys,
             recs: &recs,
+            hinv: &hinv,
             kernel: *kernel,
         };
         for_each_row(&rows, &mut sums);
