@@ -6,9 +6,8 @@ use crate::common;
 use nalgebra::SMatrix;
 use sphfmu::case::Case;
 use sphfmu::particles::Vector;
-use sphfmu::scheme::crksph::reproducing::{
-    coefficients, pair_kernels, symmetric_kernel, volumes, RkOrder,
-};
+use sphfmu::scheme::crksph::pair_kernels::pair_kernels;
+use sphfmu::scheme::crksph::reproducing::{coefficients, symmetric_kernel, volumes, RkOrder};
 use sphfmu::sim::Simulation;
 
 fn jittered<const D: usize>() -> Simulation<D> {

@@ -320,6 +320,19 @@ impl<const D: usize, K: Kernel + Copy> DimKernel<D, K> {
         self.norm(hinv) * hinv * self.kernel.shape(q).1
     }
 
+    /// W and ∂W/∂r with a precomputed 1/h, from one shape evaluation (passes that need both,
+    /// such as CRKSPH's pair kernels).
+    #[inline(always)]
+    pub fn w_dwdr_hinv(&self, r: f64, hinv: f64) -> (f64, f64) {
+        let q = r * hinv;
+        if q >= SUPPORT {
+            return (0.0, 0.0);
+        }
+        let (w, dw) = self.kernel.shape(q);
+        let norm = self.norm(hinv);
+        (norm * w, norm * hinv * dw)
+    }
+
     /// σ/h^D from 1/h: the factor W(r, h) = σ/h^D · w(r/h) shares over all r.
     #[inline(always)]
     pub fn norm(&self, hinv: f64) -> f64 {

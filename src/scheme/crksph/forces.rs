@@ -4,7 +4,8 @@
 //! m_i a_ij = −m_j a_ji, linear momentum is conserved to round-off; the force is not central,
 //! so angular momentum only approximately (Frontiere, Raskin & Owen (2017) App C).
 
-use super::reproducing::{PairKernel, RkCoefficients};
+use super::pair_kernels::PairKernel;
+use super::reproducing::RkCoefficients;
 use crate::particles::Vector;
 use crate::system::System;
 
@@ -31,7 +32,7 @@ pub fn pressure_acceleration<const D: usize>(
     sys: &System<D>,
     vol: &[f64],
     coef: &[RkCoefficients<D>],
-    kern: &[PairKernel<D>],
+    kern: &[PairKernel],
     pressure: &[f64],
 ) -> Vec<Vector<D>> {
     let p = &sys.particles;
@@ -41,14 +42,14 @@ pub fn pressure_acceleration<const D: usize>(
         if sys.wall_pair(i, j) {
             return;
         }
-        let (w, gw) = kern[pr.index];
+        let pk = kern[pr.index];
         let cj = coef[j].reflected(pr.code);
         *a += pair_force(
             &coef[i],
             &cj,
             &pr.dx,
-            w,
-            &gw,
+            pk.w,
+            &pk.gradient(&pr.dx),
             vol[i],
             vol[j],
             pressure[i] + pressure[j],

@@ -21,20 +21,21 @@
 //! * No XSPH (item 17).
 
 pub mod forces;
+mod momentum;
+pub mod pair_kernels;
 pub mod reproducing;
 pub mod viscosity;
 
 use super::compatible::PairWork;
-use super::paper_step::{self, PairSums};
-use super::rosswog::gradients::reflect;
+use super::paper_step;
 use super::standard::{check_above, check_range, curl_norm};
 use super::{smoothing, Scheme, SchemeError};
 use crate::system::System;
-use reproducing::{
-    coefficients, density, pair_kernels_and_volumes, PairKernel, RkCoefficients, RkOrder,
-};
+use momentum::CrkMomentum;
+use pair_kernels::{pair_kernels_and_volumes, PairKernel};
+use reproducing::{coefficients, density, RkCoefficients, RkOrder};
 use serde::{Deserialize, Serialize};
-use viscosity::{pair_q, velocity_gradients, ViscosityParams};
+use viscosity::{velocity_gradients, ViscosityParams};
 
 /// Reproducing order as written in case files.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -148,7 +149,7 @@ impl<const D: usize> Crksph<D> {
         &mut self,
         sys: &mut System<D>,
         solve_h: bool,
-    ) -> (Vec<f64>, Vec<RkCoefficients<D>>, Vec<PairKernel<D>>) {
+    ) -> (Vec<f64>, Vec<RkCoefficients<D>>, Vec<PairKernel>) {
         let n = sys.particles.len();
         if solve_h {
             self.ones.resize(n, 1.0);
@@ -215,46 +216,17 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
         sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
 
         let t0 = std::time::Instant::now();
-        let n = sys.particles.len();
-        let mut out = vec![PairSums::<D>::default(); n];
         let mut work = std::mem::take(&mut self.work);
         work.reset(sys);
-        {
-            let p = &sys.particles;
-            let visc = &self.visc;
-            sys.gather_pairs(&mut out, &mut work.acc, |i, o, slot, pr| {
-                let j = pr.b;
-                if sys.wall_pair(i, j) {
-                    return; // the slot stays zero: no work between rigid walls
-                }
-                let (w, gw) = kern[pr.index];
-                let cj = coef[j].reflected(pr.code);
-                let (_, gij) = coef[i].corrected(&pr.dx, w, &gw);
-                let (_, gji) = cj.corrected(&(-pr.dx), w, &(-gw));
-                let dg = gij - gji;
-                let vij = p.vel[i] - pr.vb;
-                let (qi, qj) = pair_q(
-                    visc,
-                    &pr.dx,
-                    &vij,
-                    &grads[i],
-                    &reflect(&grads[j], pr.code),
-                    (p.h[i], p.rho[i], p.sound_speed[i]),
-                    (p.h[j], p.rho[j], p.sound_speed[j]),
-                );
-                let vv = vol[i] * vol[j] / p.mass[i];
-                // eq 64 with P → P + Q; eq 78
-                let a_ij = dg * (-0.5 * vv * (p.pressure[i] + p.pressure[j] + qi + qj));
-                *slot = a_ij;
-                o.acc += a_ij;
-                o.dudt += 0.5 * vv * (p.pressure[j] + qj) * vij.dot(&dg);
-                // Frontiere, Raskin & Owen (2017): Q_max = max 4 Q_i, approach speed max(0, (v_j − v_i)·x̂_ij)
-                o.q_max = o.q_max.max(4.0 * qi);
-                if pr.r > 0.0 {
-                    o.approach = o.approach.max(-vij.dot(&pr.dx) / pr.r);
-                }
-            });
+        let out = CrkMomentum {
+            sys,
+            vol: &vol,
+            coef: &coef,
+            kern: &kern,
+            grads: &grads,
+            visc: self.visc,
         }
+        .run(&mut work.acc);
         self.work = work;
         paper_step::store(sys, t0, &out);
         Ok(())

@@ -9,6 +9,7 @@
 //! Gradients are with respect to the evaluation point x_i, V_j and h held fixed; every node,
 //! including i itself, stays where it is (so the self term contributes V_i W(0) δ^{αγ} to ∂m1).
 
+use super::pair_kernels::PairKernel;
 use crate::domain::Domain;
 use crate::neighbours::unpack;
 use crate::particles::Vector;
@@ -85,43 +86,8 @@ pub fn volumes<const D: usize>(sys: &System<D>) -> Vec<f64> {
         .collect()
 }
 
-/// Symmetrised kernel value W_ij and gradient ∇_i W_ij of one listed pair.
-pub type PairKernel<const D: usize> = (f64, Vector<D>);
-
-/// [`symmetric_kernel`] for every pair of the working list, in list order (indexed by
-/// [`crate::system::Pair::index`]): every CRKSPH pass reuses them instead of evaluating the
-/// kernel twice per pair again (the kernel was a third of the run time before this cache).
-pub fn pair_kernels<const D: usize>(sys: &System<D>) -> Vec<PairKernel<D>> {
-    let p = &sys.particles;
-    let mut out = vec![(0.0, Vector::<D>::zeros()); sys.neighbours.total_pairs()];
-    let mut unit = vec![(); p.len()];
-    sys.gather_pairs(&mut unit, &mut out, |i, _, slot, pr| {
-        *slot = symmetric_kernel(sys, p.h[i], p.h[pr.b], &pr.dx, pr.r);
-    });
-    out
-}
-
-/// [`pair_kernels`] and the volumes V_i = 1/Σ_j W(x_ij, h_i) (eq 75, self included) from the
-/// same kernel evaluations.
-pub fn pair_kernels_and_volumes<const D: usize>(sys: &System<D>) -> (Vec<PairKernel<D>>, Vec<f64>) {
-    let p = &sys.particles;
-    let k = &sys.kernel;
-    let mut out = vec![(0.0, Vector::<D>::zeros()); sys.neighbours.total_pairs()];
-    let mut sums: Vec<f64> = p.h.iter().map(|&h| k.w0(h)).collect();
-    sys.gather_pairs(&mut sums, &mut out, |i, s, slot, pr| {
-        let (ei, ej) = (k.eval(pr.r, p.h[i]), k.eval(pr.r, p.h[pr.b]));
-        *s += ei.w;
-        let gw = if pr.r > 0.0 {
-            pr.dx * (0.5 * (ei.dwdr + ej.dwdr) / pr.r)
-        } else {
-            Vector::zeros()
-        };
-        *slot = (0.5 * (ei.w + ej.w), gw);
-    });
-    (out, sums.iter().map(|s| 1.0 / s).collect())
-}
-
-/// Symmetrised kernel value and gradient (w.r.t. x_i) for a pair at distance r along dx.
+/// Symmetrised kernel value and gradient (w.r.t. x_i) for a pair at distance r along dx: the
+/// plain formula, for checks ([`super::pair_kernels`] computes them for a whole list).
 #[inline]
 pub fn symmetric_kernel<const D: usize>(
     sys: &System<D>,
@@ -213,12 +179,13 @@ impl<const D: usize> Moments<D> {
     }
 }
 
-/// Correction coefficients for every particle (volumes from [`volumes`]). A near-singular
+/// Correction coefficients for every particle (volumes from [`volumes`] or
+/// [`super::pair_kernels::pair_kernels_and_volumes`]). A near-singular
 /// second moment (too few or one-sided neighbours) falls back to zeroth order, counted.
 pub fn coefficients<const D: usize>(
     sys: &System<D>,
     vol: &[f64],
-    kern: &[PairKernel<D>],
+    kern: &[PairKernel],
     order: RkOrder,
 ) -> (Vec<RkCoefficients<D>>, u64) {
     let n = sys.particles.len();
@@ -240,8 +207,8 @@ pub fn coefficients<const D: usize>(
             for (k, &e) in sys.neighbours.of(i).iter().enumerate() {
                 let (j, code) = unpack(e);
                 let dx = dom.separation(&p.pos[i], &p.pos[j], code);
-                let (w, gw) = kern[first + k];
-                mo.add(vol[j], &dx, w, &gw);
+                let pk = kern[first + k];
+                mo.add(vol[j], &dx, pk.w, &pk.gradient(&dx));
             }
             match mo.coefficients(order) {
                 Some(c) => (c, false),
@@ -263,15 +230,15 @@ pub fn density<const D: usize>(
     sys: &System<D>,
     vol: &[f64],
     coef: &[RkCoefficients<D>],
-    kern: &[PairKernel<D>],
+    kern: &[PairKernel],
 ) -> Vec<f64> {
     let p = &sys.particles;
     let n = p.len();
     let mut sums = vec![(0.0, 0.0); n];
     sys.gather(&mut sums, |i, s, pr| {
         let j = pr.b;
-        let (w, gw) = kern[pr.index];
-        let (wr, _) = coef[i].corrected(&pr.dx, w, &gw);
+        let pk = kern[pr.index];
+        let (wr, _) = coef[i].corrected(&pr.dx, pk.w, &pk.gradient(&pr.dx));
         let mij = if p.material[i] == p.material[j] {
             p.mass[j]
         } else {

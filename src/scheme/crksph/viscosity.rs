@@ -6,7 +6,8 @@
 //! (shear included) gives v̂_ij = 0 and Q = 0. Lengths in the paper are in units of its h,
 //! whose kernel support is η_max·h; ours is 2h, so its η = |x_ij| η_max / (2 h_ours).
 
-use super::reproducing::{PairKernel, RkCoefficients};
+use super::pair_kernels::PairKernel;
+use super::reproducing::RkCoefficients;
 use crate::particles::Vector;
 use crate::system::System;
 use nalgebra::SMatrix;
@@ -43,13 +44,13 @@ pub fn velocity_gradients<const D: usize>(
     sys: &System<D>,
     vol: &[f64],
     coef: &[RkCoefficients<D>],
-    kern: &[PairKernel<D>],
+    kern: &[PairKernel],
 ) -> Vec<SMatrix<f64, D, D>> {
     let p = &sys.particles;
     let mut out = vec![SMatrix::<f64, D, D>::zeros(); p.len()];
     sys.gather(&mut out, |i, g, pr| {
-        let (w, gw) = kern[pr.index];
-        let (_, gij) = coef[i].corrected(&pr.dx, w, &gw);
+        let pk = kern[pr.index];
+        let (_, gij) = coef[i].corrected(&pr.dx, pk.w, &pk.gradient(&pr.dx));
         let vij = p.vel[i] - pr.vb;
         *g -= vij * gij.transpose() * vol[pr.b];
     });
