@@ -61,22 +61,35 @@ impl<const K: usize> Pieces<K> {
 fn mirrored<const K: usize>(x: f64) -> (f64, f64) {
     let half = (K as f64 + 1.0) / 2.0;
     let t = half - x;
-    if t <= 0.0 {
-        return (0.0, 0.0);
-    }
-    // piece j ∋ t (at a knot both neighbouring pieces agree: the spline is C^{K−1})
-    let j = (t as usize).min(4);
-    let c = &Pieces::<K>::C[j];
-    let t = t - j as f64;
-    let mut w = c[K];
-    let mut dw = K as f64 * c[K];
+    // piece j ∋ t (at a knot both neighbouring pieces agree: the spline is C^{K−1}). Its
+    // coefficients are summed up the pieces, C[0] + Σ_{p ≤ j} (C[p] − C[p−1]), rather than read
+    // by a table index: an index (or a chain of selects, which the compiler turns back into
+    // one) keeps a loop over pair lanes scalar, and this sum lets it become SIMD. The C are
+    // integers well below 2^53, so every partial sum is exact: same coefficients, same bits.
+    let j = t.max(0.0).floor().min(4.0);
+    let coef = |m: usize| {
+        let c = &Pieces::<K>::C;
+        let mut sum = c[0][m];
+        for piece in 1..5 {
+            let step = c[piece][m] - c[piece - 1][m];
+            sum += if j >= piece as f64 { step } else { 0.0 };
+        }
+        sum
+    };
+    let s = t - j;
+    let mut w = coef(K);
+    let mut dw = K as f64 * coef(K);
     for m in (1..K).rev() {
-        w = w * t + c[m];
-        dw = dw * t + m as f64 * c[m];
+        w = w * s + coef(m);
+        dw = dw * s + m as f64 * coef(m);
     }
-    w = w * t + c[0];
+    w = w * s + coef(0);
     // dw/dx = −dw/ds
-    (w, -dw)
+    if t <= 0.0 {
+        (0.0, 0.0)
+    } else {
+        (w, -dw)
+    }
 }
 
 macro_rules! bspline_kernel {
