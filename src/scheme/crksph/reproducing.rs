@@ -119,34 +119,90 @@ struct Moments<const D: usize> {
     dm2: [SMatrix<f64, D, D>; D],
 }
 
-impl<const D: usize> Moments<D> {
+/// The pair sums the moments are made of. Every pair kernel gradient lies along the pair,
+/// ∇W̄ = ḡ x (see [`PairKernel`]), so with a = V W̄ and b = V ḡ the moments (eqs 16–21) are
+///   m0 = Σ a,  m1 = Σ a x,  m2 = Σ a x⊗x,  ∂m0 = Σ b x,
+///   ∂_γ m1^α = Σ b x^α x^γ + δ^{αγ} m0,
+///   ∂_γ m2^{αβ} = Σ b x^α x^β x^γ + m1^α δ^{βγ} + m1^β δ^{αγ},
+/// which takes 15 running sums per particle in 2D and 29 in 3D (the last two tensors are
+/// symmetric, so only α ≤ β ≤ γ is summed) where adding the moments pair by pair took 21 and 52
+/// (with the identity and unit-vector products that nalgebra builds for each).
+#[derive(Clone, Copy)]
+struct PairSums<const D: usize> {
+    s0: f64,
+    s1: [f64; D],
+    s2: [[f64; D]; D],
+    t1: [f64; D],
+    t2: [[f64; D]; D],
+    t3: [[[f64; D]; D]; D],
+}
+
+impl<const D: usize> PairSums<D> {
     fn zero() -> Self {
         Self {
-            m0: 0.0,
-            m1: Vector::zeros(),
-            m2: SMatrix::zeros(),
-            dm0: Vector::zeros(),
-            dm1: SMatrix::zeros(),
-            dm2: [SMatrix::zeros(); D],
+            s0: 0.0,
+            s1: [0.0; D],
+            s2: [[0.0; D]; D],
+            t1: [0.0; D],
+            t2: [[0.0; D]; D],
+            t3: [[[0.0; D]; D]; D],
         }
     }
 
-    /// Add node j with volume v at separation x = x_i − x_j, symmetrised kernel w, gradient gw.
-    #[inline]
-    fn add(&mut self, v: f64, x: &Vector<D>, w: f64, gw: &Vector<D>) {
-        self.m0 += v * w;
-        self.m1 += x * (v * w);
-        self.m2 += x * x.transpose() * (v * w);
-        self.dm0 += gw * v;
-        self.dm1 += x * gw.transpose() * v + SMatrix::<f64, D, D>::identity() * (v * w);
-        for g in 0..D {
-            let mut e = Vector::<D>::zeros();
-            e[g] = 1.0;
-            self.dm2[g] +=
-                (x * x.transpose() * gw[g] + x * e.transpose() * w + e * x.transpose() * w) * v;
+    /// Add node j with volume v at separation x = x_i − x_j and pair kernel (W̄, ḡ).
+    #[inline(always)]
+    fn add(&mut self, v: f64, x: &Vector<D>, w: f64, g: f64) {
+        let (a, b) = (v * w, v * g);
+        self.s0 += a;
+        for al in 0..D {
+            let (ax, bx) = (a * x[al], b * x[al]);
+            self.s1[al] += ax;
+            self.t1[al] += bx;
+            for be in al..D {
+                let bxx = bx * x[be];
+                self.s2[al][be] += ax * x[be];
+                self.t2[al][be] += bxx;
+                for ga in be..D {
+                    self.t3[al][be][ga] += bxx * x[ga];
+                }
+            }
         }
     }
 
+    /// The moments and their gradients, the symmetric halves filled in.
+    fn moments(&self) -> Moments<D> {
+        let m1 = Vector::<D>::from_fn(|al, _| self.s1[al]);
+        let sym2 = |t: &[[f64; D]; D], al: usize, be: usize| t[al.min(be)][al.max(be)];
+        let m2 = SMatrix::<f64, D, D>::from_fn(|al, be| sym2(&self.s2, al, be));
+        let dm1 = SMatrix::<f64, D, D>::from_fn(|al, ga| {
+            sym2(&self.t2, al, ga) + if al == ga { self.s0 } else { 0.0 }
+        });
+        let dm2 = std::array::from_fn(|ga| {
+            SMatrix::<f64, D, D>::from_fn(|al, be| {
+                let mut k = [al, be, ga];
+                k.sort_unstable();
+                let mut d = self.t3[k[0]][k[1]][k[2]];
+                if be == ga {
+                    d += m1[al];
+                }
+                if al == ga {
+                    d += m1[be];
+                }
+                d
+            })
+        });
+        Moments {
+            m0: self.s0,
+            m1,
+            m2,
+            dm0: Vector::from_fn(|al, _| self.t1[al]),
+            dm1,
+            dm2,
+        }
+    }
+}
+
+impl<const D: usize> Moments<D> {
     fn coefficients(&self, order: RkOrder) -> Option<RkCoefficients<D>> {
         if order == RkOrder::Zeroth || D == 0 {
             let a = 1.0 / self.m0;
@@ -195,21 +251,17 @@ pub fn coefficients<const D: usize>(
         .into_par_iter()
         .with_min_len(64)
         .map(|i| {
-            let mut mo = Moments::<D>::zero();
+            let mut sums = PairSums::<D>::zero();
             // self term: x_ii = 0, ∇W_ii = 0
-            mo.add(
-                vol[i],
-                &Vector::zeros(),
-                sys.kernel.w0(p.h[i]),
-                &Vector::zeros(),
-            );
+            sums.add(vol[i], &Vector::zeros(), sys.kernel.w0(p.h[i]), 0.0);
             let first = sys.neighbours.offsets[i];
             for (k, &e) in sys.neighbours.of(i).iter().enumerate() {
                 let (j, code) = unpack(e);
                 let dx = dom.separation(&p.pos[i], &p.pos[j], code);
                 let pk = kern[first + k];
-                mo.add(vol[j], &dx, pk.w, &pk.gradient(&dx));
+                sums.add(vol[j], &dx, pk.w, pk.g);
             }
+            let mo = sums.moments();
             match mo.coefficients(order) {
                 Some(c) => (c, false),
                 None => (
