@@ -66,11 +66,13 @@ fn mirrored<const K: usize>(x: f64) -> (f64, f64) {
     // by a table index: an index (or a chain of selects, which the compiler turns back into
     // one) keeps a loop over pair lanes scalar, and this sum lets it become SIMD. The C are
     // integers well below 2^53, so every partial sum is exact: same coefficients, same bits.
-    let j = t.max(0.0).floor().min(4.0);
+    // Only pieces 0..=K/2 are reached: t ≤ (K+1)/2, and where t = (K+1)/2 is a knot (x = 0, K
+    // odd) piece K/2 at s = 1 gives the same integer sums as the next piece at s = 0.
+    let j = t.max(0.0).floor().min((K / 2) as f64);
     let coef = |m: usize| {
         let c = &Pieces::<K>::C;
         let mut sum = c[0][m];
-        for piece in 1..5 {
+        for piece in 1..=K / 2 {
             let step = c[piece][m] - c[piece - 1][m];
             sum += if j >= piece as f64 { step } else { 0.0 };
         }
