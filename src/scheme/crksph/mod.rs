@@ -21,6 +21,7 @@
 //! * No XSPH (item 17).
 
 pub mod forces;
+mod gradient;
 mod momentum;
 pub mod pair_kernels;
 pub mod reproducing;

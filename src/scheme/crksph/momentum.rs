@@ -151,20 +151,47 @@ struct PairTerms {
 #[derive(Default)]
 struct Scratch(Box<(PairBlock, PairTerms)>);
 
-/// One side's correction coefficients as plain arrays (components past D unused).
+/// One side's correction coefficients as plain arrays (components past D zero), the form a
+/// lane loop reads.
 #[derive(Clone, Copy, Default)]
-struct Coef {
-    a: f64,
-    b: [f64; 3],
-    ga: [f64; 3],
-    gb: [[f64; 3]; 3],
+pub(super) struct Coef {
+    pub a: f64,
+    pub b: [f64; 3],
+    pub ga: [f64; 3],
+    /// gb[α][γ] = ∂γ B^α
+    pub gb: [[f64; 3]; 3],
+}
+
+impl Coef {
+    pub fn from_rk<const D: usize>(c: &RkCoefficients<D>) -> Self {
+        let pad = |k: usize| if k < D { c.b[k] } else { 0.0 };
+        Self {
+            a: c.a,
+            b: std::array::from_fn(pad),
+            ga: std::array::from_fn(|k| if k < D { c.grad_a[k] } else { 0.0 }),
+            gb: std::array::from_fn(|k| {
+                std::array::from_fn(|l| {
+                    if k < D && l < D {
+                        c.grad_b[(k, l)]
+                    } else {
+                        0.0
+                    }
+                })
+            }),
+        }
+    }
 }
 
 /// The corrected-kernel gradient G (eq 9) of a side with coefficients `c` at separation `x`
 /// from it, for the pair kernel W̄ = `w`, ∇W̄ = `g`·x (Frontiere, Raskin & Owen (2017) eqs 8–9):
 /// G^γ = A(1 + B·x) g x^γ + ∂γA (1 + B·x) W̄ + A(∂γB^α x^α + B^γ) W̄.
 #[inline(always)]
-fn corrected_gradient<const D: usize>(c: &Coef, x: &[f64; 3], w: f64, g: f64) -> [f64; 3] {
+pub(super) fn corrected_gradient<const D: usize>(
+    c: &Coef,
+    x: &[f64; 3],
+    w: f64,
+    g: f64,
+) -> [f64; 3] {
     let mut bx = 0.0;
     for k in 0..D {
         bx += c.b[k] * x[k];
@@ -314,20 +341,7 @@ impl<const D: usize> Rows<'_, '_, D> {
         let visc = self.pass.visc;
         let to_paper = visc.native_support / SUPPORT;
         let s_a = to_paper * ra.hinv;
-        let ca = Coef {
-            a: ra.coef.a,
-            b: std::array::from_fn(|k| if k < D { ra.coef.b[k] } else { 0.0 }),
-            ga: std::array::from_fn(|k| if k < D { ra.coef.grad_a[k] } else { 0.0 }),
-            gb: std::array::from_fn(|k| {
-                std::array::from_fn(|l| {
-                    if k < D && l < D {
-                        ra.coef.grad_b[(k, l)]
-                    } else {
-                        0.0
-                    }
-                })
-            }),
-        };
+        let ca = Coef::from_rk(&ra.coef);
         let gva: [[f64; 3]; 3] = std::array::from_fn(|k| {
             std::array::from_fn(|l| if k < D && l < D { ra.grad[(k, l)] } else { 0.0 })
         });

@@ -6,10 +6,8 @@
 //! (shear included) gives v̂_ij = 0 and Q = 0. Lengths in the paper are in units of its h,
 //! whose kernel support is η_max·h; ours is 2h, so its η = |x_ij| η_max / (2 h_ours).
 
-use super::pair_kernels::PairKernel;
-use super::reproducing::RkCoefficients;
+pub use super::gradient::velocity_gradients;
 use crate::particles::Vector;
-use crate::system::System;
 use nalgebra::SMatrix;
 
 /// Limiter and viscosity constants (Frontiere, Raskin & Owen (2017) §3.2; eqs 45–55; 69–74; defaults for W7 with n_h = 1).
@@ -37,24 +35,6 @@ impl Default for ViscosityParams {
             limiter: true,
         }
     }
-}
-
-/// RK velocity gradients (eq 54): grad[(α, β)] = ∂β v^α.
-pub fn velocity_gradients<const D: usize>(
-    sys: &System<D>,
-    vol: &[f64],
-    coef: &[RkCoefficients<D>],
-    kern: &[PairKernel],
-) -> Vec<SMatrix<f64, D, D>> {
-    let p = &sys.particles;
-    let mut out = vec![SMatrix::<f64, D, D>::zeros(); p.len()];
-    sys.gather(&mut out, |i, g, pr| {
-        let pk = kern[pr.index];
-        let (_, gij) = coef[i].corrected(&pr.dx, pk.w, &pk.gradient(&pr.dx));
-        let vij = p.vel[i] - pr.vb;
-        *g -= vij * gij.transpose() * vol[pr.b];
-    });
-    out
 }
 
 /// Viscous pressures (Q_i, Q_j) of the pair (i, j): x_ij = x_i − x_j, v_ij, gradients of i and
