@@ -142,8 +142,13 @@ fn density_is_exact_across_a_static_material_boundary() {
     sim.sys.compact_neighbours();
     let vol = volumes(&sim.sys);
     let kern = pair_kernels(&sim.sys);
-    let (coef, _) = coefficients(&sim.sys, &vol, &kern, RkOrder::Linear);
-    let rho = sphfmu::scheme::crksph::reproducing::density(&sim.sys, &vol, &coef, &kern);
+    let rho = sphfmu::scheme::crksph::reproducing::coefficients_and_density(
+        &sim.sys,
+        &vol,
+        &kern,
+        RkOrder::Linear,
+    )
+    .rho;
     let p = &sim.sys.particles;
     let exact = |i: usize| if p.material[i] == 1 { 4.0 } else { 1.0 };
     let crk = (0..p.len())
@@ -290,7 +295,7 @@ fn limited_viscosity_vanishes_for_linear_velocity_fields_including_shear() {
 fn the_force_pass_on_lanes_matches_the_pair_formulas_of_eqs_64_and_78() {
     use sphfmu::scheme::crksph::forces::pair_force;
     use sphfmu::scheme::crksph::pair_kernels::pair_kernels_and_volumes;
-    use sphfmu::scheme::crksph::reproducing::density;
+    use sphfmu::scheme::crksph::reproducing::coefficients_and_density;
     use sphfmu::scheme::crksph::viscosity::{pair_q, velocity_gradients};
     use sphfmu::scheme::crksph::CrksphParams;
     use sphfmu::scheme::rosswog::gradients::reflect;
@@ -321,7 +326,7 @@ fn the_force_pass_on_lanes_matches_the_pair_formulas_of_eqs_64_and_78() {
     let p = &sys.particles;
     let (kern, vol) = pair_kernels_and_volumes(sys);
     let (coef, _) = coefficients(sys, &vol, &kern, RkOrder::Linear);
-    let rho = density(sys, &vol, &coef, &kern);
+    let rho = coefficients_and_density(sys, &vol, &kern, RkOrder::Linear).rho;
     let grads = velocity_gradients(sys, &vol, &coef, &kern);
     let visc = CrksphParams::default().viscosity(sys.kernel.kernel.native_support(), sys.eta);
     let n = p.len();

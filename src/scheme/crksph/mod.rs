@@ -34,7 +34,7 @@ use super::{smoothing, Scheme, SchemeError};
 use crate::system::System;
 use momentum::CrkMomentum;
 use pair_kernels::{pair_kernels_and_volumes, PairKernel};
-use reproducing::{coefficients, density, RkCoefficients, RkOrder};
+use reproducing::{coefficients_and_density, RkCoefficients, RkOrder};
 use serde::{Deserialize, Serialize};
 use viscosity::{velocity_gradients, ViscosityParams};
 
@@ -173,10 +173,11 @@ impl<const D: usize> Crksph<D> {
                     .min(h_max)
             })
             .collect();
-        let (coef, fallbacks) = coefficients(sys, &vol, &kern, self.order);
-        sys.stats.ia_fallbacks = fallbacks;
-        sys.stats.ia_fallbacks_total += fallbacks;
-        sys.particles.rho = density(sys, &vol, &coef, &kern);
+        let state = coefficients_and_density(sys, &vol, &kern, self.order);
+        sys.stats.ia_fallbacks = state.fallbacks;
+        sys.stats.ia_fallbacks_total += state.fallbacks;
+        sys.particles.rho = state.rho;
+        let coef = state.coef;
         sys.update_eos();
         sys.stats.total_pairs += 2 * sys.neighbours.total_pairs() as u64;
         sys.stats.seconds_density += t0.elapsed().as_secs_f64();

@@ -236,76 +236,91 @@ impl<const D: usize> Moments<D> {
 }
 
 /// Correction coefficients for every particle (volumes from [`volumes`] or
-/// [`super::pair_kernels::pair_kernels_and_volumes`]). A near-singular
-/// second moment (too few or one-sided neighbours) falls back to zeroth order, counted.
+/// [`super::pair_kernels::pair_kernels_and_volumes`]) and the fallback count: see
+/// [`coefficients_and_density`].
 pub fn coefficients<const D: usize>(
     sys: &System<D>,
     vol: &[f64],
     kern: &[PairKernel],
     order: RkOrder,
 ) -> (Vec<RkCoefficients<D>>, u64) {
+    let state = coefficients_and_density(sys, vol, kern, order);
+    (state.coef, state.fallbacks)
+}
+
+/// What [`coefficients_and_density`] gives.
+pub struct CorrectedState<const D: usize> {
+    pub coef: Vec<RkCoefficients<D>>,
+    /// ρ of eq 76
+    pub rho: Vec<f64>,
+    /// particles whose second moment was near singular (zeroth order used)
+    pub fallbacks: u64,
+}
+
+/// Correction coefficients for every particle, and the CRKSPH mass density (Frontiere, Raskin
+/// & Owen (2017) eq 76): ρ_i = Σ_j m_ij V_j W^R_ij / Σ_j V_j² W^R_ij with m_ij = m_j for the
+/// same material and m_i across materials, sums including j = i. On a uniform lattice this
+/// gives exact piecewise-constant densities across a static material boundary.
+///
+/// W^R_ij needs only i's own coefficients, so ρ_i comes from a second sweep over i's row right
+/// after its coefficients, with the separations kept from the first (one pass over the list
+/// where a separate density gather cost as much again). A near-singular second moment (too
+/// few or one-sided neighbours) falls back to zeroth order, counted.
+pub fn coefficients_and_density<const D: usize>(
+    sys: &System<D>,
+    vol: &[f64],
+    kern: &[PairKernel],
+    order: RkOrder,
+) -> CorrectedState<D> {
     let n = sys.particles.len();
     let p = &sys.particles;
     let dom = &sys.domain;
-    let out: Vec<(RkCoefficients<D>, bool)> = (0..n)
+    let out: Vec<(RkCoefficients<D>, f64, bool)> = (0..n)
         .into_par_iter()
         .with_min_len(64)
-        .map(|i| {
+        .map_init(Vec::new, |seps: &mut Vec<Vector<D>>, i| {
             let mut sums = PairSums::<D>::zero();
+            let w0 = sys.kernel.w0(p.h[i]);
             // self term: x_ii = 0, ∇W_ii = 0
-            sums.add(vol[i], &Vector::zeros(), sys.kernel.w0(p.h[i]), 0.0);
+            sums.add(vol[i], &Vector::zeros(), w0, 0.0);
             let first = sys.neighbours.offsets[i];
-            for (k, &e) in sys.neighbours.of(i).iter().enumerate() {
+            let row = sys.neighbours.of(i);
+            seps.clear();
+            for (k, &e) in row.iter().enumerate() {
                 let (j, code) = unpack(e);
                 let dx = dom.separation(&p.pos[i], &p.pos[j], code);
                 let pk = kern[first + k];
                 sums.add(vol[j], &dx, pk.w, pk.g);
+                seps.push(dx);
             }
             let mo = sums.moments();
-            match mo.coefficients(order) {
+            let (c, fallback) = match mo.coefficients(order) {
                 Some(c) => (c, false),
                 None => (
                     mo.coefficients(RkOrder::Zeroth).expect("zeroth order"),
                     true,
                 ),
+            };
+            let (mut num, mut den) = (0.0, 0.0);
+            for (k, (&e, dx)) in row.iter().zip(seps.iter()).enumerate() {
+                let j = unpack(e).0;
+                let (wr, _) = c.corrected(dx, kern[first + k].w, &Vector::zeros());
+                let mij = if p.material[i] == p.material[j] {
+                    p.mass[j]
+                } else {
+                    p.mass[i]
+                };
+                num += mij * vol[j] * wr;
+                den += vol[j] * vol[j] * wr;
             }
+            let (wr0, _) = c.corrected(&Vector::zeros(), w0, &Vector::zeros());
+            let rho = (num + p.mass[i] * vol[i] * wr0) / (den + vol[i] * vol[i] * wr0);
+            (c, rho, fallback)
         })
         .collect();
-    let fallbacks = out.iter().filter(|o| o.1).count() as u64;
-    (out.into_iter().map(|o| o.0).collect(), fallbacks)
-}
-
-/// CRKSPH mass density (Frontiere, Raskin & Owen (2017) eq 76, eq 76): ρ_i = Σ_j m_ij V_j W^R_ij / Σ_j V_j² W^R_ij with
-/// m_ij = m_j for the same material and m_i across materials; sums include j = i. On a uniform
-/// lattice this gives exact piecewise-constant densities across a static material boundary.
-pub fn density<const D: usize>(
-    sys: &System<D>,
-    vol: &[f64],
-    coef: &[RkCoefficients<D>],
-    kern: &[PairKernel],
-) -> Vec<f64> {
-    let p = &sys.particles;
-    let n = p.len();
-    let mut sums = vec![(0.0, 0.0); n];
-    sys.gather(&mut sums, |i, s, pr| {
-        let j = pr.b;
-        let pk = kern[pr.index];
-        let (wr, _) = coef[i].corrected(&pr.dx, pk.w, &pk.gradient(&pr.dx));
-        let mij = if p.material[i] == p.material[j] {
-            p.mass[j]
-        } else {
-            p.mass[i]
-        };
-        s.0 += mij * vol[j] * wr;
-        s.1 += vol[j] * vol[j] * wr;
-    });
-    (0..n)
-        .map(|i| {
-            let (wr0, _) =
-                coef[i].corrected(&Vector::zeros(), sys.kernel.w0(p.h[i]), &Vector::zeros());
-            let num = sums[i].0 + p.mass[i] * vol[i] * wr0;
-            let den = sums[i].1 + vol[i] * vol[i] * wr0;
-            num / den
-        })
-        .collect()
+    CorrectedState {
+        fallbacks: out.iter().filter(|o| o.2).count() as u64,
+        rho: out.iter().map(|o| o.1).collect(),
+        coef: out.into_iter().map(|o| o.0).collect(),
+    }
 }
