@@ -372,9 +372,9 @@ fn lanes_against_pair_formulas<const D: usize>(boundary: &str, spacing: f64) -> 
     let dmax = reference.iter().map(|r| r.1.abs()).fold(0.0, f64::max);
     let qmax = reference.iter().map(|r| r.2).fold(0.0, f64::max);
     let (mut ea, mut ed) = (0.0f64, 0.0f64);
-    for i in 0..n {
-        ea = ea.max((p.acc[i] - reference[i].0).norm() / amax);
-        ed = ed.max((p.dudt[i] - reference[i].1).abs() / dmax);
+    for (r, (a, dudt)) in reference.iter().zip(p.acc.iter().zip(&p.dudt)) {
+        ea = ea.max((a - r.0).norm() / amax);
+        ed = ed.max((dudt - r.1).abs() / dmax);
     }
     println!("{D}D {boundary}: lanes against the pair formulas: acceleration {ea:.1e}, du/dt {ed:.1e} (of the largest); Q_max {qmax:.2e}");
     // the viscosity must act for this to test it

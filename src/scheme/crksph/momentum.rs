@@ -186,6 +186,7 @@ impl Coef {
 /// from it, for the pair kernel W̄ = `w`, ∇W̄ = `g`·x (Frontiere, Raskin & Owen (2017) eqs 8–9):
 /// G^γ = A(1 + B·x) g x^γ + ∂γA (1 + B·x) W̄ + A(∂γB^α x^α + B^γ) W̄.
 #[inline(always)]
+#[allow(clippy::needless_range_loop)] // components 0..D of padded [f64; 3] arrays
 pub(super) fn corrected_gradient<const D: usize>(
     c: &Coef,
     x: &[f64; 3],
@@ -211,6 +212,7 @@ pub(super) fn corrected_gradient<const D: usize>(
 
 /// x·(M x) for a D×D matrix M given by rows.
 #[inline(always)]
+#[allow(clippy::needless_range_loop)] // components 0..D of padded arrays
 fn quadratic<const D: usize>(m: &[[f64; 3]; 3], x: &[f64; 3]) -> f64 {
     let mut s = 0.0;
     for al in 0..D {
