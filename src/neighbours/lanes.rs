@@ -35,6 +35,14 @@ pub fn padded(n: usize) -> usize {
     (n.div_ceil(PAD) * PAD).min(LANES)
 }
 
+/// 1/h of every particle, so that a lane pass multiplies instead of dividing per pair.
+pub fn inverse_h(h: &[f64]) -> Vec<f64> {
+    h.par_iter()
+        .with_min_len(crate::threads::LIGHT)
+        .map(|h| 1.0 / h)
+        .collect()
+}
+
 /// The geometry lanes of one pair: x_a − image(x_b) into `dx[..][i]` and v_a − image(v_b) into
 /// `vab[..][i]` (components past D left alone), through the domain's image `code`; returns
 /// image(v_b).

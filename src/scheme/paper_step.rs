@@ -31,6 +31,32 @@ impl<const D: usize> Default for PairSums<D> {
     }
 }
 
+/// One row of a force pass that keeps its pair accelerations (PSPH's and CRKSPH's lane
+/// passes): the row's sums and its a_ij slots.
+pub(crate) struct PairRow<'s, const D: usize> {
+    pub sums: PairSums<D>,
+    pub slots: &'s mut [Vector<D>],
+}
+
+impl<'s, const D: usize> PairRow<'s, D> {
+    /// One row per particle, each with its slice of `slots` (one per listed pair).
+    pub fn split(sys: &System<D>, slots: &'s mut [Vector<D>]) -> Vec<Self> {
+        sys.neighbours
+            .split_rows_mut(slots)
+            .into_iter()
+            .map(|slots| PairRow {
+                sums: PairSums::default(),
+                slots,
+            })
+            .collect()
+    }
+
+    /// The rows' sums, in particle order.
+    pub fn sums(rows: Vec<Self>) -> Vec<PairSums<D>> {
+        rows.into_iter().map(|o| o.sums).collect()
+    }
+}
+
 /// Store the accelerations and du/dt with the §7.2 signal speeds.
 pub(crate) fn store<const D: usize>(
     sys: &mut System<D>,

@@ -16,7 +16,7 @@
 //! the scalar gather with a closure per pair took 8.3 s of 32 s, a fifth of it in `pair_q`
 //! on nalgebra vectors (BENCHMARKS.md, issue 19).
 
-use super::super::paper_step::PairSums;
+use super::super::paper_step::{PairRow, PairSums};
 use super::pair_kernels::PairKernel;
 use super::reproducing::RkCoefficients;
 use super::viscosity::ViscosityParams;
@@ -79,30 +79,15 @@ impl<const D: usize> CrkMomentum<'_, D> {
                 grad: self.grads[a],
             })
             .collect();
-        let mut out: Vec<RowOut<D>> = self
-            .sys
-            .neighbours
-            .split_rows_mut(slots)
-            .into_iter()
-            .map(|slots| RowOut {
-                sums: PairSums::default(),
-                slots,
-            })
-            .collect();
+        let mut out = PairRow::split(self.sys, slots);
         let rows = Rows {
             pass: self,
             recs: &recs,
             _slots: PhantomData,
         };
         for_each_row(&rows, &mut out);
-        out.into_iter().map(|o| o.sums).collect()
+        PairRow::sums(out)
     }
-}
-
-/// One row's sums and its pair slots.
-struct RowOut<'s, const D: usize> {
-    sums: PairSums<D>,
-    slots: &'s mut [Vector<D>],
 }
 
 struct Rows<'a, 's, const D: usize> {
@@ -226,11 +211,11 @@ fn quadratic<const D: usize>(m: &[[f64; 3]; 3], x: &[f64; 3]) -> f64 {
 }
 
 impl<'s, const D: usize> RowPass for Rows<'_, 's, D> {
-    type Acc = RowOut<'s, D>;
+    type Acc = PairRow<'s, D>;
     type Scratch = Scratch;
 
     #[inline(always)]
-    fn row(&self, a: usize, o: &mut RowOut<'s, D>, scratch: &mut Scratch) {
+    fn row(&self, a: usize, o: &mut PairRow<'s, D>, scratch: &mut Scratch) {
         let (blk, t) = &mut *scratch.0;
         let sys = self.pass.sys;
         let dom = &sys.domain;

@@ -12,12 +12,10 @@
 //! listed pair, twice a step (BENCHMARKS.md, issue 19).
 
 use crate::kernel::{DimKernel, Kernel, KernelVisitor};
-use crate::neighbours::lanes::{for_each_row, padded, RowPass, LANES};
+use crate::neighbours::lanes::{for_each_row, inverse_h, padded, RowPass, LANES};
 use crate::neighbours::unpack;
 use crate::particles::Vector;
 use crate::system::System;
-use crate::threads::LIGHT;
-use rayon::prelude::*;
 use std::marker::PhantomData;
 
 /// The symmetrised kernel of one listed pair: W̄_ij and ḡ with ∇_i W̄_ij = ḡ x_ij.
@@ -39,11 +37,7 @@ impl PairKernel {
 /// [`crate::system::Pair::index`]), and the volumes V_i (eq 75).
 pub fn pair_kernels_and_volumes<const D: usize>(sys: &System<D>) -> (Vec<PairKernel>, Vec<f64>) {
     let p = &sys.particles;
-    let hinv: Vec<f64> =
-        p.h.par_iter()
-            .with_min_len(LIGHT)
-            .map(|h| 1.0 / h)
-            .collect();
+    let hinv = inverse_h(&p.h);
     let mut slots = vec![PairKernel::default(); sys.neighbours.total_pairs()];
     let vol = {
         let mut out: Vec<RowOut> = sys

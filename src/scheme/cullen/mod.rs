@@ -14,7 +14,7 @@
 //! ∇v is the linearly corrected SPH gradient (E.4 with E.6), exact for linear fields.
 
 use crate::kernel::{DimKernel, Kernel, KernelVisitor};
-use crate::neighbours::lanes::for_each_row;
+use crate::neighbours::lanes::{for_each_row, inverse_h};
 use crate::system::System;
 use crate::threads::LIGHT;
 use measure::{GradientRecord, GradientRows, GradientSums, XiRows};
@@ -135,11 +135,7 @@ impl<const D: usize> KernelVisitor<D> for Measure<'_, D> {
         let (cd, sys) = (self.cd, self.sys);
         let n = sys.particles.len();
         let p = &sys.particles;
-        let hinv: Vec<f64> =
-            p.h.par_iter()
-                .with_min_len(LIGHT)
-                .map(|h| 1.0 / h)
-                .collect();
+        let hinv = inverse_h(&p.h);
         let recs: Vec<GradientRecord<D>> = (0..n)
             .into_par_iter()
             .with_min_len(LIGHT)

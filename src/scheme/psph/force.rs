@@ -12,7 +12,7 @@
 //! (BENCHMARKS.md, issue 19).
 
 use super::super::crksph::viscosity::ViscosityParams;
-use super::super::paper_step::PairSums;
+use super::super::paper_step::{PairRow, PairSums};
 use crate::kernel::{DimKernel, Kernel, KernelVisitor, SUPPORT};
 use crate::neighbours::lanes::{fill_pair, for_each_row, padded, RowPass, LANES};
 use crate::neighbours::unpack;
@@ -86,33 +86,20 @@ impl<const D: usize> PsphForce<'_, D> {
                 wall: p.body[a] > 0,
             })
             .collect();
-        let rows = self.sys.neighbours.split_rows_mut(slots);
-        let mut out: Vec<RowOut<D>> = rows
-            .into_iter()
-            .map(|slots| RowOut {
-                sums: PairSums::default(),
-                slots,
-            })
-            .collect();
+        let mut out = PairRow::split(self.sys, slots);
         self.sys.kernel.visit(Visit {
             pass: self,
             recs: &recs,
             out: &mut out,
         });
-        out.into_iter().map(|o| o.sums).collect()
+        PairRow::sums(out)
     }
-}
-
-/// One row's sums and its pair slots.
-struct RowOut<'s, const D: usize> {
-    sums: PairSums<D>,
-    slots: &'s mut [Vector<D>],
 }
 
 struct Visit<'a, 's, const D: usize> {
     pass: &'a PsphForce<'a, D>,
     recs: &'a [PsphRecord<D>],
-    out: &'a mut [RowOut<'s, D>],
+    out: &'a mut [PairRow<'s, D>],
 }
 
 impl<'s, const D: usize> KernelVisitor<D> for Visit<'_, 's, D> {
@@ -171,11 +158,11 @@ struct PairTerms {
 pub(super) struct Scratch(Box<(PairBlock, PairTerms)>);
 
 impl<'s, const D: usize, K: Kernel + Copy> RowPass for Rows<'_, 's, D, K> {
-    type Acc = RowOut<'s, D>;
+    type Acc = PairRow<'s, D>;
     type Scratch = Scratch;
 
     #[inline(always)]
-    fn row(&self, a: usize, o: &mut RowOut<'s, D>, scratch: &mut Scratch) {
+    fn row(&self, a: usize, o: &mut PairRow<'s, D>, scratch: &mut Scratch) {
         let (blk, t) = &mut *scratch.0;
         let recs = self.recs;
         let dom = &self.pass.sys.domain;
