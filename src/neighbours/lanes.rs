@@ -35,6 +35,19 @@ pub fn padded(n: usize) -> usize {
     (n.div_ceil(PAD) * PAD).min(LANES)
 }
 
+/// The block's lane count, [`padded`] `n`, with the separations of the padding lanes set to
+/// zero: the passes read a zero separation as "adds nothing".
+#[inline(always)]
+pub fn pad_separations<const D: usize>(dx: &mut [[f64; LANES]; 3], n: usize) -> usize {
+    let lanes = padded(n);
+    for i in n..lanes {
+        for row in dx.iter_mut().take(D) {
+            row[i] = 0.0;
+        }
+    }
+    lanes
+}
+
 /// 1/h of every particle, so that a lane pass multiplies instead of dividing per pair.
 pub fn inverse_h(h: &[f64]) -> Vec<f64> {
     h.par_iter()

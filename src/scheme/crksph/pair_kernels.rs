@@ -12,7 +12,7 @@
 //! listed pair, twice a step (BENCHMARKS.md, issue 19).
 
 use crate::kernel::{DimKernel, Kernel, KernelVisitor};
-use crate::neighbours::lanes::{for_each_row, inverse_h, padded, RowPass, LANES};
+use crate::neighbours::lanes::{for_each_row, inverse_h, pad_separations, RowPass, LANES};
 use crate::neighbours::unpack;
 use crate::particles::Vector;
 use crate::system::System;
@@ -131,12 +131,7 @@ impl<'s, const D: usize, K: Kernel + Copy> RowPass for Rows<'_, 's, D, K> {
                 }
                 blk.hinv[i] = self.hinv[b];
             }
-            let lanes = padded(n);
-            for i in n..lanes {
-                for c in 0..D {
-                    blk.dx[c][i] = 0.0;
-                }
-            }
+            let lanes = pad_separations::<D>(&mut blk.dx, n);
             for i in 0..lanes {
                 let mut r2 = 0.0;
                 for c in 0..D {

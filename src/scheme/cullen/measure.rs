@@ -8,7 +8,7 @@
 //! passes took 1.73 s as gathers with a closure per pair.
 
 use crate::kernel::{DimKernel, Kernel};
-use crate::neighbours::lanes::{fill_pair, padded, RowPass, LANES};
+use crate::neighbours::lanes::{fill_pair, pad_separations, padded, RowPass, LANES};
 use crate::neighbours::unpack;
 use crate::particles::Vector;
 use crate::system::System;
@@ -85,12 +85,7 @@ impl<const D: usize, K: Kernel + Copy> RowPass for GradientRows<'_, D, K> {
                 blk.m[i] = rb.m;
                 blk.c[i] = rb.c;
             }
-            let lanes = padded(n);
-            for i in n..lanes {
-                for d in 0..D {
-                    blk.dx[d][i] = 0.0;
-                }
-            }
+            let lanes = pad_separations::<D>(&mut blk.dx, n);
             for i in 0..lanes {
                 let mut r2 = 0.0;
                 let mut vdx = 0.0;

@@ -14,7 +14,7 @@
 use super::super::crksph::viscosity::ViscosityParams;
 use super::super::paper_step::{PairRow, PairSums};
 use crate::kernel::{DimKernel, Kernel, KernelVisitor, SUPPORT};
-use crate::neighbours::lanes::{fill_pair, for_each_row, padded, RowPass, LANES};
+use crate::neighbours::lanes::{fill_pair, for_each_row, pad_separations, RowPass, LANES};
 use crate::neighbours::unpack;
 use crate::particles::Vector;
 use crate::system::System;
@@ -195,12 +195,7 @@ impl<'s, const D: usize, K: Kernel + Copy> RowPass for Rows<'_, 's, D, K> {
                 blk.alpha[i] = rb.alpha;
                 blk.walls[i] = if ra.wall && rb.wall { 1.0 } else { 0.0 };
             }
-            let lanes = padded(n);
-            for i in n..lanes {
-                for k in 0..D {
-                    blk.dx[k][i] = 0.0;
-                }
-            }
+            let lanes = pad_separations::<D>(&mut blk.dx, n);
             self.terms(ra, blk, t, lanes);
             // Sum in list order; keep each a_ij.
             for (i, slot) in slots.iter_mut().enumerate() {

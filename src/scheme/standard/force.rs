@@ -10,7 +10,7 @@
 
 use super::StandardParams;
 use crate::kernel::{DimKernel, Kernel, KernelVisitor};
-use crate::neighbours::lanes::{fill_pair, for_each_row, padded, RowPass, LANES};
+use crate::neighbours::lanes::{fill_pair, for_each_row, pad_separations, RowPass, LANES};
 use crate::neighbours::unpack;
 use crate::particles::Vector;
 use crate::system::System;
@@ -282,12 +282,7 @@ impl<const D: usize, K: Kernel + Copy, const PLAIN: bool> RowPass for ForceRows<
                     blk.wall[i] = if ra.wall || rb.wall { 1.0 } else { 0.0 };
                 }
             }
-            let lanes = padded(n);
-            for i in n..lanes {
-                for k in 0..D {
-                    blk.dx[k][i] = 0.0;
-                }
-            }
+            let lanes = pad_separations::<D>(&mut blk.dx, n);
             self.terms(ra, standard_here, blk, t, lanes);
             // Sum in list order.
             for i in 0..n {
