@@ -72,6 +72,22 @@ impl<const D: usize> Domain<D> {
         w
     }
 
+    /// The minimum-image wrap of [`Self::separation`] as per-axis constants, for pair loops
+    /// that form separations over whole rows (see [`MinimumImage`]).
+    pub fn minimum_image(&self) -> MinimumImage {
+        let mut m = MinimumImage {
+            len: [0.0; 3],
+            half: [f64::INFINITY; 3],
+        };
+        for k in 0..D {
+            if self.kind[k] == BoundaryKind::Periodic {
+                m.len[k] = self.hi[k] - self.lo[k];
+                m.half[k] = 0.5 * m.len[k];
+            }
+        }
+        m
+    }
+
     /// `x_a − image(x_b)`, minimum image on periodic axes. Exactly antisymmetric in (a, b)
     /// for code 0, which keeps pairwise forces antisymmetric to the last bit.
     #[inline(always)]
@@ -143,6 +159,31 @@ impl<const D: usize> Domain<D> {
                 }
                 BoundaryKind::Open => {}
             }
+        }
+    }
+}
+
+/// The minimum-image convention of [`Domain::separation`] on one component, without a branch:
+/// a periodic axis moves d by the box length L when |d| > L/2 (the same compares and the same
+/// subtraction as `separation`, so the same bits); every other axis has L/2 = ∞, so neither
+/// compare holds and d stays as it is. A loop over a row's entries that applies it becomes
+/// SIMD.
+#[derive(Debug, Clone, Copy)]
+pub struct MinimumImage {
+    len: [f64; 3],
+    half: [f64; 3],
+}
+
+impl MinimumImage {
+    /// Component `axis` of x_a − image(x_b), from `d` = x_a[axis] − image(x_b)[axis].
+    #[inline(always)]
+    pub fn wrap(&self, axis: usize, d: f64) -> f64 {
+        let (len, half) = (self.len[axis], self.half[axis]);
+        let down = if d > half { d - len } else { d };
+        if d < -half {
+            d + len
+        } else {
+            down
         }
     }
 }

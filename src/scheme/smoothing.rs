@@ -221,6 +221,8 @@ impl<const D: usize, K: Kernel + Copy> KappaOf<'_, D, K> {
 /// kernel), and the per-pair terms.
 #[derive(Default)]
 struct KappaLanes {
+    /// image(x_b), then x_a − image(x_b) (component by component)
+    dx: [Vec<f64>; 3],
     r2: Vec<f64>,
     r: Vec<f64>,
     x: Vec<f64>,
@@ -243,16 +245,40 @@ impl KappaLanes {
         let p = &sys.particles;
         let xa = p.pos[a];
         let row = sys.verlet.list.of(a);
+        let n = row.len();
+        for v in self.dx.iter_mut().take(D) {
+            v.resize(n, 0.0);
+        }
         for v in [&mut self.r2, &mut self.r, &mut self.x] {
-            v.clear();
+            v.resize(n, 0.0);
         }
         self.y.clear();
-        for &e in row {
+        // Fill: b's image and X_b (a gather); then the separations, r² and r as loops over
+        // the row, which the compiler makes SIMD (a scalar square root per entry in the
+        // fill was the largest single cost of the h solve on the 3D Sod).
+        for (j, &e) in row.iter().enumerate() {
             let (b, code) = unpack(e);
-            let r2 = sys.domain.separation(&xa, &p.pos[b], code).norm_squared();
-            self.r2.push(r2);
-            self.r.push(r2.sqrt());
-            self.x.push(x[b]);
+            let y = sys.domain.image_position(&p.pos[b], code);
+            for k in 0..D {
+                self.dx[k][j] = y[k];
+            }
+            self.x[j] = x[b];
+        }
+        let wrap = sys.domain.minimum_image();
+        for (k, d) in self.dx.iter_mut().enumerate().take(D) {
+            for d in d[..n].iter_mut() {
+                *d = wrap.wrap(k, xa[k] - *d);
+            }
+        }
+        let (r2, r) = (&mut self.r2[..n], &mut self.r[..n]);
+        r2.fill(0.0);
+        for d in self.dx.iter().take(D) {
+            for (s, d) in r2.iter_mut().zip(&d[..n]) {
+                *s += d * d;
+            }
+        }
+        for (r, s) in r.iter_mut().zip(r2.iter()) {
+            *r = s.sqrt();
         }
         if let Some(y) = extra {
             self.y.extend(row.iter().map(|&e| y[unpack(e).0]));
