@@ -167,7 +167,9 @@ impl<const D: usize> Domain<D> {
 /// a periodic axis moves d by the box length L when |d| > L/2 (the same compares and the same
 /// subtraction as `separation`, so the same bits); every other axis has L/2 = ∞, so neither
 /// compare holds and d stays as it is. A loop over a row's entries that applies it becomes
-/// SIMD.
+/// SIMD. `separation` keeps its own branches: one pair at a time, they skip the non-periodic
+/// axes, and routing it through this wrap made the 3D Sod's force pass 10 % slower (2.38–2.45
+/// s against 2.69–3.27 s to t = 0.05, measured 2026-12-05).
 #[derive(Debug, Clone, Copy)]
 pub struct MinimumImage {
     len: [f64; 3],
