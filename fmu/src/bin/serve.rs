@@ -17,11 +17,13 @@ use clap::Parser;
 use sphfmu::parallel::comm::Comm;
 use sphfmu_fmu::bridge::error_payload;
 use sphfmu_fmu::bridge::node::{handle, set_text, Op, OPS};
+use sphfmu_fmu::bridge::proxy::NODE_ENDING;
 use sphfmu_fmu::instance::inputs::Snapshot;
 use sphfmu_fmu::instance::{Instance, Status};
 use std::io::Write;
 use std::path::PathBuf;
-use std::sync::{mpsc, Arc};
+use std::sync::{mpsc, Arc, Mutex, PoisonError};
+use std::time::Duration;
 use zenoh::bytes::Encoding;
 use zenoh::query::Query;
 use zenoh::Wait;
@@ -172,6 +174,65 @@ fn reply(q: &Query, op: Op, r: Result<Vec<u8>, String>) {
     }
 }
 
+/// The request rank 0 is serving (its operation, its query, the node's time when it came),
+/// kept where the signal thread of [`answer_on_signal`] can answer it.
+type Pending = Arc<Mutex<Option<(Op, Query, f64)>>>;
+
+fn take(pending: &Pending) -> Option<(Op, Query, f64)> {
+    pending
+        .lock()
+        .unwrap_or_else(PoisonError::into_inner)
+        .take()
+}
+
+/// How long the signal thread leaves zenoh's own threads to send its error reply before the
+/// process ends: loopback and LAN replies leave in milliseconds, and Open MPI sends SIGKILL
+/// 1 s after SIGTERM (its `odls_base_sigkill_timeout`, default 1, `ompi_info --all`).
+const REPLY_FLUSH: Duration = Duration::from_millis(200);
+
+/// On SIGTERM, SIGINT or SIGHUP, answer the request being served with an error that says why
+/// ([`NODE_ENDING`], which the proxy FMU reads as a node gone), then end as the signal would.
+/// Under mpirun this is how a dead rank reaches the master: Open MPI ends the job by sending
+/// SIGTERM to the other ranks, while rank 0 may wait in a collective for the dead rank and
+/// could never answer from its main loop (issue 23: "the node replies with an error").
+fn answer_on_signal(pending: Pending, ranks: Option<usize>) -> Result<(), String> {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let mut signals = signal_hook::iterator::Signals::new([SIGTERM, SIGINT, SIGHUP])
+        .map_err(|e| format!("signal handlers: {e}"))?;
+    std::thread::spawn(move || {
+        let Some(sig) = signals.forever().next() else {
+            return;
+        };
+        if let Some((op, q, t)) = take(&pending) {
+            let name = match sig {
+                SIGTERM => "SIGTERM",
+                SIGINT => "SIGINT",
+                _ => "SIGHUP",
+            };
+            let why = match ranks {
+                Some(n) => format!(
+                    "; on {n} ranks under mpirun this means that another rank stopped (Open MPI ends the whole job)"
+                ),
+                None => String::new(),
+            };
+            let msg = format!(
+                "{NODE_ENDING}: {name} arrived while it served `{}` from t = {t}{why}. The request did not complete",
+                OPS.iter().find(|o| o.1 == op).map_or("?", |o| o.0)
+            );
+            eprintln!("sphfmu-serve: {msg}");
+            if let Err(e) = q.reply_err(error_payload(&msg)).wait() {
+                eprintln!("sphfmu-serve: reply to {} not sent: {e}", q.key_expr());
+            }
+            drop(q);
+            std::thread::sleep(REPLY_FLUSH);
+        }
+        // the signal's own ending (its exit status, no destructors racing the main thread)
+        let _ = signal_hook::low_level::emulate_default_handler(sig);
+        std::process::exit(128 + sig);
+    });
+    Ok(())
+}
+
 /// What rank 0 hands to every rank: a request to answer, a step of `--run`, or the end.
 enum Command {
     Request(Op, Option<Vec<u8>>),
@@ -256,6 +317,8 @@ fn serve(a: Args, ranks: Ranks) -> Result<(), String> {
     if ranks.as_ref().is_some_and(|c| c.rank() != 0) {
         return follow(inst, &ranks, &initial);
     }
+    let pending: Pending = Arc::default();
+    answer_on_signal(pending.clone(), ranks.as_ref().map(|c| c.size()))?;
     let session = inst.live_session().expect("zenoh mode is on");
     let prefix = inst.live_prefix();
     let (tx, rx) = mpsc::channel::<(Op, Query)>();
@@ -302,9 +365,18 @@ fn serve(a: Args, ranks: Ranks) -> Result<(), String> {
             break;
         };
         let payload = q.payload().map(|p| p.to_bytes().to_vec());
-        share(&ranks, Some(&Command::Request(op, payload.clone())))?;
+        *pending.lock().unwrap_or_else(PoisonError::into_inner) = Some((op, q, inst.time()));
+        if let Err(e) = share(&ranks, Some(&Command::Request(op, payload.clone()))) {
+            if let Some((op, q, _)) = take(&pending) {
+                reply(&q, op, Err(format!("{NODE_ENDING}: {e}")));
+            }
+            return Err(e);
+        }
         let r = handle(&mut inst, op, payload.as_deref(), &initial);
-        reply(&q, op, r);
+        // (none when a signal took it: that thread has answered, and the process is ending)
+        if let Some((op, q, _)) = take(&pending) {
+            reply(&q, op, r);
+        }
         if op == Op::Stop {
             break;
         }

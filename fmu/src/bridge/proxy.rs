@@ -24,6 +24,11 @@ pub const REPLY_TIMEOUT: Duration = Duration::from_secs(3600);
 /// declarations propagate in about 0.1–0.5 s on loopback).
 pub const FIRST_REPLY_TIMEOUT: Duration = Duration::from_secs(20);
 
+/// How a node's error reply begins when the node is ending while it serves a request (a
+/// signal: under mpirun, Open MPI's SIGTERM after another rank of the job stopped). The
+/// request did not complete and the node will not answer again.
+pub const NODE_ENDING: &str = "the node is ending";
+
 /// How a request to the node failed.
 #[derive(Debug, Clone, PartialEq)]
 pub enum RemoteError {
@@ -31,13 +36,21 @@ pub enum RemoteError {
     Refused(String),
     /// No reply: the node is gone, unreachable or too slow.
     Unreachable(String),
+    /// The node answered that it is ending (its message begins with [`NODE_ENDING`] and says
+    /// why): gone, as [`RemoteError::Unreachable`], but with the node's own reason.
+    Ended(String),
 }
 
 impl RemoteError {
     pub fn message(&self) -> &str {
         match self {
-            RemoteError::Refused(m) | RemoteError::Unreachable(m) => m,
+            RemoteError::Refused(m) | RemoteError::Unreachable(m) | RemoteError::Ended(m) => m,
         }
+    }
+
+    /// The node is gone (no reply, or it said it is ending): a later call needs a node anew.
+    pub fn node_gone(&self) -> bool {
+        !matches!(self, RemoteError::Refused(_))
     }
 }
 
@@ -120,6 +133,9 @@ impl RemoteNode {
                         _ => None,
                     })
                     .unwrap_or_else(|| format!("{key}: an error reply without a message"));
+                if msg.starts_with(NODE_ENDING) {
+                    return Err(RemoteError::Ended(msg));
+                }
                 Err(RemoteError::Refused(msg))
             }
         }

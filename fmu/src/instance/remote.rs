@@ -115,14 +115,18 @@ impl Instance {
             }
             // a refused input or argument: nothing changed on the node
             Err(RemoteError::Refused(m)) => Err((Status::Error, format!("remote {prefix:?}: {m}"))),
-            Err(RemoteError::Unreachable(m)) => {
+            Err(gone) => {
                 self.mode = Mode::Failed;
                 // the next call that needs a node reaches one anew (e.g. setFMUState to a
                 // node started again)
                 self.remote = None;
+                let what = match gone {
+                    RemoteError::Ended(m) => format!("the node replied: {m}"),
+                    e => format!("the node did not answer ({})", e.message()),
+                };
                 Err((
                     Status::Error,
-                    format!("remote {prefix:?}: the node did not answer ({m}); restore a saved FMU state (to a node started anew) or reset"),
+                    format!("remote {prefix:?}: {what}; restore a saved FMU state (to a node started anew) or reset"),
                 ))
             }
         }
@@ -173,7 +177,7 @@ impl Instance {
         let node = self.remote.as_mut().expect("opened above");
         let prefix = node.prefix.clone();
         if let Err(e) = node.restore(&s.solver) {
-            if matches!(e, crate::bridge::proxy::RemoteError::Unreachable(_)) {
+            if e.node_gone() {
                 self.remote = None;
             }
             return err(format!("setFMUState: remote {prefix:?}: {}", e.message()));
