@@ -136,6 +136,11 @@ pub trait RankSums: Send + Sync + std::fmt::Debug {
     fn merge_in_place(&self, x: &mut [ExactSum]);
     /// Element-wise maxima over the ranks (the same rules).
     fn max_in_place(&self, x: &mut [f64]);
+    /// The owners' values of some fields for this rank's halo copies, in the halo's order,
+    /// `width` numbers per copy; `pack` gives this rank's values for a list of its owned
+    /// particles (the copies another rank holds). A collective; a failed exchange gives
+    /// `None` (the halo keeps its values) and is reported at the step's agreement.
+    fn halo_values(&self, width: usize, pack: &dyn Fn(&[u32]) -> Vec<f64>) -> Option<Vec<f64>>;
 }
 
 /// A neighbour list with a skin, the positions and radii it was built for.

@@ -1,15 +1,18 @@
 //! The halo: copies of other ranks' particles near this rank's region, refreshed from their
 //! owners before every evaluation by [`HaloScheme`], which wraps the run's scheme.
 //!
-//! Design decision (issue 23 asks for per-pass refreshes of only the fields a pass needs):
-//! the halo is one exchange of whole particles per evaluation, and it is as deep as the
-//! scheme's chain of dependent passes ([`crate::scheme::Scheme::halo_depth`] supports). Each
-//! rank then runs every pass on its halo too; the outer layers come out wrong (their
-//! neighbourhoods are cut), but a pass only reads neighbours one support away, so the
-//! error moves inwards one support per pass and never reaches an owned particle. No scheme
-//! knows it runs distributed, and an evaluation costs one message per neighbour rank
-//! instead of one per pass. The price is the halo's redundant work, which `make bench`
-//! measures; exchanging between passes instead is left for when it is measured to pay.
+//! Two ways to keep the halo exact, chosen by the scheme ([`crate::scheme::Scheme::halo_depth`]):
+//! - **Per-pass refreshes** (issue 23's design; standard SPH and rpSPH): one exchange of
+//!   whole particles per evaluation, then, between passes, the owners' values of only the
+//!   fields the next pass reads of its neighbours ([`System::refresh_halo_fields`]). Every
+//!   halo copy then holds its owner's bits at any depth, so one support (plus the skin) is
+//!   deep enough for the scheme, and the halo's own redundant work is one support's worth.
+//! - **A deep halo** (the other schemes): one exchange per evaluation, the halo as deep as
+//!   the scheme's chain of dependent passes. Each rank runs every pass on its halo too; the
+//!   outer layers come out wrong (their neighbourhoods are cut), but a pass only reads
+//!   neighbours one support away, so the error moves inwards one support per pass and never
+//!   reaches an owned particle. The scheme needs no refresh calls, at the price of more
+//!   halo work, which `make bench` measures (the `MPI:` row).
 
 use super::comm::{Comm, CommError};
 use super::exact::{registers, ExactSum};
@@ -39,6 +42,8 @@ pub struct ExchangeStats {
     pub seconds: f64,
     /// Halo refreshes (one per evaluation).
     pub refreshes: u64,
+    /// Refreshes of some fields between passes (`System::refresh_halo_fields`).
+    pub field_refreshes: u64,
     /// Halo copies this rank holds now.
     pub halo_particles: u64,
     /// Particles that moved to another rank.
@@ -91,6 +96,75 @@ impl crate::system::RankSums for Link {
         match crate::parallel::comm::Reduce::max_each(&*self.comm, x) {
             Ok(top) => x.copy_from_slice(&top),
             Err(e) => self.fail(e.to_string()),
+        }
+    }
+
+    fn halo_values(&self, width: usize, pack: &dyn Fn(&[u32]) -> Vec<f64>) -> Option<Vec<f64>> {
+        match self.exchange_values(width, pack) {
+            Ok(v) => Some(v),
+            Err(e) => {
+                self.fail(e);
+                None
+            }
+        }
+    }
+}
+
+/// A field whose owners' values a halo refresh between passes carries
+/// ([`System::refresh_halo_fields`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum HaloField {
+    H,
+    Rho,
+    Omega,
+    Alpha,
+    /// `Particles::extra_scalars[slot]`.
+    Extra(usize),
+}
+
+impl<const D: usize> System<D> {
+    /// Overwrite the halo copies' `fields` with their owners' values (a collective on a
+    /// distributed run, nothing on one process): the refresh between two passes, when the
+    /// next one reads of its neighbours what the previous one computed.
+    pub fn refresh_halo_fields(&mut self, fields: &[HaloField]) {
+        let Some(ranks) = self.ranks.clone() else {
+            return;
+        };
+        let p = &self.particles;
+        let column = |f: HaloField| -> &[f64] {
+            match f {
+                HaloField::H => &p.h,
+                HaloField::Rho => &p.rho,
+                HaloField::Omega => &p.omega,
+                HaloField::Alpha => &p.alpha,
+                HaloField::Extra(s) => &p.extra_scalars[s],
+            }
+        };
+        let pack = |pick: &[u32]| -> Vec<f64> {
+            let cols: Vec<&[f64]> = fields.iter().map(|&f| column(f)).collect();
+            pick.iter()
+                .flat_map(|&i| cols.iter().map(move |c| c[i as usize]))
+                .collect()
+        };
+        let Some(got) = ranks.halo_values(fields.len(), &pack) else {
+            return;
+        };
+        let own = self.owned();
+        let p = &mut self.particles;
+        for (k, &f) in fields.iter().enumerate() {
+            let col = match f {
+                HaloField::H => &mut p.h,
+                HaloField::Rho => &mut p.rho,
+                HaloField::Omega => &mut p.omega,
+                HaloField::Alpha => &mut p.alpha,
+                HaloField::Extra(s) => &mut p.extra_scalars[s],
+            };
+            for (x, v) in col[own..]
+                .iter_mut()
+                .zip(got.iter().skip(k).step_by(fields.len()))
+            {
+                *x = *v;
+            }
         }
     }
 }
@@ -147,6 +221,53 @@ impl Link {
         let mut s = self.stats.lock().unwrap_or_else(|e| e.into_inner());
         s.bytes_sent += bytes;
         s.messages += messages;
+        s.seconds += t0.elapsed().as_secs_f64();
+        Ok(out)
+    }
+
+    /// Send `pack(plan.send[r])` (`width` numbers per particle) to each rank r and return
+    /// what the others sent here, joined in the halo's order (rank order).
+    fn exchange_values(
+        &self,
+        width: usize,
+        pack: &dyn Fn(&[u32]) -> Vec<f64>,
+    ) -> Result<Vec<f64>, String> {
+        let t0 = std::time::Instant::now();
+        let plan = self.plan.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        let me = self.comm.rank();
+        let send: Vec<Vec<u8>> = plan
+            .send
+            .iter()
+            .enumerate()
+            .map(|(r, pick)| {
+                if r == me || pick.is_empty() {
+                    vec![]
+                } else {
+                    super::comm::f64_bytes(&pack(pick))
+                }
+            })
+            .collect();
+        let bytes: usize = send.iter().map(|b| b.len()).sum();
+        let messages = send.iter().filter(|b| !b.is_empty()).count();
+        let got = self.comm.all_to_all(send).map_err(|e| e.to_string())?;
+        let mut out = Vec::with_capacity(plan.recv.iter().sum::<usize>() * width);
+        for (r, b) in got.iter().enumerate() {
+            if r == me {
+                continue;
+            }
+            let want = plan.recv.get(r).copied().unwrap_or(0) * width;
+            if b.len() != want * 8 {
+                return Err(format!(
+                    "rank {r} sent {} halo values, {want} expected",
+                    b.len() / 8
+                ));
+            }
+            out.extend(super::comm::bytes_f64(b));
+        }
+        let mut s = self.stats.lock().unwrap_or_else(|e| e.into_inner());
+        s.bytes_sent += bytes as u64;
+        s.messages += messages as u64;
+        s.field_refreshes += 1;
         s.seconds += t0.elapsed().as_secs_f64();
         Ok(out)
     }

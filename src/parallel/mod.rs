@@ -6,7 +6,7 @@
 //! Every rank's particles come out bit for bit as on one rank, whatever the number of
 //! ranks: neighbour rows are summed in the order of the particles' stable ids
 //! (`System::canonical_order`), the h solve's result does not depend on the neighbour list's
-//! history, the halo is deep enough for every pass (see `halo`), and the time step is a
+//! history, the halo is exact for every pass (refreshed between passes, or deep enough; see `halo`), and the time step is a
 //! global minimum. Body loads, probes, patches and port flows are exact sums (`exact`): the
 //! same bits on any number of ranks. Totals of the diagnostics (energies, momenta) are sums
 //! of per-rank sums in rank order: equal to round-off, not to the bit, across rank counts.
@@ -18,7 +18,7 @@ mod halo;
 pub mod mpi;
 pub mod regions;
 
-pub use halo::{ExchangeStats, HaloScheme, Link};
+pub use halo::{ExchangeStats, HaloField, HaloScheme, Link};
 
 use crate::integrate::IntegratorKind;
 use crate::particles::{Particles, Vector};

@@ -20,6 +20,7 @@ use super::{smoothing, Scheme, SchemeError};
 use crate::kernel::{DimKernel, Kernel, KernelVisitor};
 use crate::neighbours::cut::{CutBlock, CutVisitor};
 use crate::neighbours::lanes::LANES;
+use crate::parallel::HaloField;
 use crate::system::System;
 use crate::threads::LIGHT;
 use rayon::prelude::*;
@@ -188,10 +189,16 @@ impl<const D: usize> Scheme<D> for StandardSph {
     }
 
     /// h and ρ (neighbours' positions), the working list's cut (their h), then the velocity
-    /// gradients on the cut rows, and the force (their ρ, P, Ω and Balsara factors): three
-    /// supports; the wall condition (walls read the fluid's P) is not distributed yet.
+    /// gradients on the cut rows, and the force (their ρ, P, Ω and Balsara factors). Without
+    /// the Cullen–Dehnen switch, `evaluate` refreshes the halo's h, ρ, Ω and Balsara factors
+    /// between those passes, so one support is deep enough; the switch's own passes
+    /// (`cullen`) read their neighbours' results without refreshes, and need three.
     fn halo_depth(&self) -> usize {
-        3
+        if self.cullen.is_some() {
+            3
+        } else {
+            1
+        }
     }
 
     fn init(&mut self, sys: &mut System<D>) {
@@ -216,7 +223,12 @@ impl<const D: usize> Scheme<D> for StandardSph {
 
     fn evaluate(&mut self, sys: &mut System<D>) -> Result<(), SchemeError> {
         match self.params.density {
-            DensityMode::Summation => smoothing::solve_density_and_h_weighted(sys, None, false),
+            DensityMode::Summation => {
+                smoothing::solve_density_and_h_weighted(sys, None, false);
+                // the cut reads the neighbours' h, the force their ρ and Ω (with an evolved
+                // ρ they come from the halo's own fields, refreshed whole before this pass)
+                sys.refresh_halo_fields(&[HaloField::H, HaloField::Rho, HaloField::Omega]);
+            }
             DensityMode::Continuity => continuity_h(sys),
         }
         match &self.cullen {
@@ -232,6 +244,8 @@ impl<const D: usize> Scheme<D> for StandardSph {
                 let t0 = std::time::Instant::now();
                 finish_gradients(sys, &grads, self.balsara_slot, self.params.balsara);
                 sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
+                // the force reads the neighbours' Balsara factors
+                sys.refresh_halo_fields(&[HaloField::Extra(self.balsara_slot)]);
             }
         }
         force_pass(sys, &self.params, self.balsara_slot, self.form);
