@@ -139,6 +139,13 @@ fn standard_sph_is_bit_identical_on_1_2_3_ranks() {
     same_on_1_2_3_ranks("name = \"standard\"");
 }
 
+/// rpSPH runs the standard passes with their halo refreshes (its own force form reads the
+/// same neighbour fields).
+#[test]
+fn rpsph_is_bit_identical_on_1_2_3_ranks() {
+    same_on_1_2_3_ranks("name = \"rpsph\"");
+}
+
 #[test]
 fn crksph_is_bit_identical_on_1_2_3_ranks() {
     same_on_1_2_3_ranks("name = \"crksph\"");
