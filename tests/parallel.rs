@@ -113,11 +113,11 @@ fn first_difference<const D: usize>(a: &Particles<D>, b: &Particles<D>) -> Optio
 
 /// The violent random periodic box (a disc crossing a moving background) after 50 steps on
 /// 1, 2 and 3 ranks: equal to the bit. A halo of the skin alone (no kernel support deep)
-/// must change them, or the comparison could not fail. (Standard SPH refreshes its halo's
-/// fields between passes, and its halo is one support deep; a one-support halo without
-/// those refreshes changed its particles. With the skin, one support also gives the same
-/// particles for CRKSPH and F1 on this box; their depth, 4, keeps a margin for sharper
-/// cases.)
+/// must change them, or the comparison could not fail. (Standard SPH, rpSPH and CRKSPH
+/// refresh their halo's fields between passes, and their halo is one support deep; with
+/// those refreshes removed, standard SPH's and CRKSPH's particles changed, and CRKSPH's
+/// energy drift on 3 ranks grew from 1e-15 to 3e-7. With the skin, one support also gives
+/// the same particles for F1 on this box; its depth, 4, keeps a margin for sharper cases.)
 fn same_on_1_2_3_ranks(scheme: &str) {
     let text = random_box(scheme, "", (0.04, 0.028));
     let (one, _, _) = run_on(&text, 1, 50);

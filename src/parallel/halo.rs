@@ -4,7 +4,7 @@
 //! Two ways to keep the halo exact, chosen by the scheme ([`crate::scheme::Scheme::halo_depth`]):
 //! - **Per-pass refreshes** (issue 23's design; standard SPH and rpSPH): one exchange of
 //!   whole particles per evaluation, then, between passes, the owners' values of only the
-//!   fields the next pass reads of its neighbours ([`System::refresh_halo_fields`]). Every
+//!   fields the next pass reads of its neighbours (`refresh`). Every
 //!   halo copy then holds its owner's bits at any depth, so one support (plus the skin) is
 //!   deep enough for the scheme, and the halo's own redundant work is one support's worth.
 //! - **A deep halo** (the other schemes): one exchange per evaluation, the halo as deep as
@@ -105,65 +105,6 @@ impl crate::system::RankSums for Link {
             Err(e) => {
                 self.fail(e);
                 None
-            }
-        }
-    }
-}
-
-/// A field whose owners' values a halo refresh between passes carries
-/// ([`System::refresh_halo_fields`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum HaloField {
-    H,
-    Rho,
-    Omega,
-    Alpha,
-    /// `Particles::extra_scalars[slot]`.
-    Extra(usize),
-}
-
-impl<const D: usize> System<D> {
-    /// Overwrite the halo copies' `fields` with their owners' values (a collective on a
-    /// distributed run, nothing on one process): the refresh between two passes, when the
-    /// next one reads of its neighbours what the previous one computed.
-    pub fn refresh_halo_fields(&mut self, fields: &[HaloField]) {
-        let Some(ranks) = self.ranks.clone() else {
-            return;
-        };
-        let p = &self.particles;
-        let column = |f: HaloField| -> &[f64] {
-            match f {
-                HaloField::H => &p.h,
-                HaloField::Rho => &p.rho,
-                HaloField::Omega => &p.omega,
-                HaloField::Alpha => &p.alpha,
-                HaloField::Extra(s) => &p.extra_scalars[s],
-            }
-        };
-        let pack = |pick: &[u32]| -> Vec<f64> {
-            let cols: Vec<&[f64]> = fields.iter().map(|&f| column(f)).collect();
-            pick.iter()
-                .flat_map(|&i| cols.iter().map(move |c| c[i as usize]))
-                .collect()
-        };
-        let Some(got) = ranks.halo_values(fields.len(), &pack) else {
-            return;
-        };
-        let own = self.owned();
-        let p = &mut self.particles;
-        for (k, &f) in fields.iter().enumerate() {
-            let col = match f {
-                HaloField::H => &mut p.h,
-                HaloField::Rho => &mut p.rho,
-                HaloField::Omega => &mut p.omega,
-                HaloField::Alpha => &mut p.alpha,
-                HaloField::Extra(s) => &mut p.extra_scalars[s],
-            };
-            for (x, v) in col[own..]
-                .iter_mut()
-                .zip(got.iter().skip(k).step_by(fields.len()))
-            {
-                *x = *v;
             }
         }
     }

@@ -16,9 +16,11 @@ pub mod exact;
 mod halo;
 #[cfg(feature = "mpi")]
 pub mod mpi;
+pub mod refresh;
 pub mod regions;
 
-pub use halo::{ExchangeStats, HaloField, HaloScheme, Link};
+pub use halo::{ExchangeStats, HaloScheme, Link};
+pub use refresh::{rows, HaloRow};
 
 use crate::integrate::IntegratorKind;
 use crate::particles::{Particles, Vector};

@@ -31,6 +31,7 @@ use super::compatible::PairWork;
 use super::paper_step;
 use super::standard::{check_above, check_range, curl_norm};
 use super::{smoothing, Scheme, SchemeError};
+use crate::parallel::rows;
 use crate::system::System;
 use momentum::CrkMomentum;
 use pair_kernels::{pair_kernels_and_volumes, PairKernel};
@@ -152,14 +153,25 @@ impl<const D: usize> Crksph<D> {
         solve_h: bool,
     ) -> (Vec<f64>, Vec<RkCoefficients<D>>, Vec<PairKernel>) {
         let n = sys.particles.len();
+        // A distributed run refreshes the halo between the passes below (`parallel::refresh`):
+        // each reads of its neighbours what the previous one computed.
+        let sync = sys.halo_sync();
         if solve_h {
             self.ones.resize(n, 1.0);
             smoothing::solve_density_and_h_weighted(sys, Some(&self.ones), true);
+            if sync.distributed() {
+                // the halo's h as its owners solved it, and lists that serve it
+                sync.refresh(vec![rows(&mut sys.particles.h)]);
+                smoothing::update_lists(sys);
+            }
         } else {
+            // (h from h_next, which the halo computes from refreshed V and h as its owners do)
             smoothing::update_lists(sys);
         }
         let t0 = std::time::Instant::now();
-        let (kern, vol) = pair_kernels_and_volumes(sys);
+        let (kern, mut vol) = pair_kernels_and_volumes(sys);
+        // the coefficients read the neighbours' V (eq 75)
+        sync.refresh(vec![rows(&mut vol)]);
         // h_ideal = η V^{1/ν}, at most 25 % from the current h per step (IdealH relaxes too)
         let (eta, h_max) = (sys.eta, sys.h_max);
         let p = &sys.particles;
@@ -177,7 +189,9 @@ impl<const D: usize> Crksph<D> {
         sys.stats.ia_fallbacks = state.fallbacks;
         sys.stats.ia_fallbacks_total += state.fallbacks;
         sys.particles.rho = state.rho;
-        let coef = state.coef;
+        let mut coef = state.coef;
+        // the gradients and forces read the neighbours' corrections and ρ (P and c follow)
+        sync.refresh(vec![rows(&mut coef), rows(&mut sys.particles.rho)]);
         sys.update_eos();
         sys.stats.total_pairs += 2 * sys.neighbours.total_pairs() as u64;
         sys.stats.seconds_density += t0.elapsed().as_secs_f64();
@@ -206,7 +220,9 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
         let first = self.h_next.is_empty();
         let (vol, coef, kern) = self.state(sys, first);
         let t0 = std::time::Instant::now();
-        let grads = velocity_gradients(sys, &vol, &coef, &kern);
+        let mut grads = velocity_gradients(sys, &vol, &coef, &kern);
+        // the limited viscosity reads the neighbours' velocity gradients
+        sys.halo_sync().refresh(vec![rows(&mut grads)]);
         {
             let p = &mut sys.particles;
             for (i, g) in grads.iter().enumerate() {
@@ -231,7 +247,16 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
         .run(&mut work.acc);
         self.work = work;
         paper_step::store(sys, t0, &out);
+        // the compatible energy update reads the neighbours' v^{1/2}, so their a (eq 66)
+        let (sync, p) = (sys.halo_sync(), &mut sys.particles);
+        sync.refresh(vec![rows(&mut p.acc), rows(&mut p.dudt)]);
         Ok(())
+    }
+
+    /// One support: `evaluate` refreshes the halo's V, corrections, ρ, velocity gradients
+    /// and accelerations between its passes (and h after a Newton solve).
+    fn halo_depth(&self) -> usize {
+        1
     }
 
     fn refresh(&mut self, sys: &mut System<D>) {

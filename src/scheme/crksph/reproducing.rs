@@ -28,6 +28,25 @@ pub struct RkCoefficients<const D: usize> {
     pub grad_b: SMatrix<f64, D, D>,
 }
 
+/// The coefficients as numbers, for a distributed run's halo refresh between passes.
+impl<const D: usize> crate::parallel::HaloRow for RkCoefficients<D> {
+    const WIDTH: usize = 1 + 2 * D + D * D;
+    fn put(&self, out: &mut Vec<f64>) {
+        out.push(self.a);
+        out.extend_from_slice(self.b.as_slice());
+        out.extend_from_slice(self.grad_a.as_slice());
+        out.extend_from_slice(self.grad_b.as_slice());
+    }
+    fn take(x: &[f64]) -> Self {
+        Self {
+            a: x[0],
+            b: Vector::from_column_slice(&x[1..1 + D]),
+            grad_a: Vector::from_column_slice(&x[1 + D..1 + 2 * D]),
+            grad_b: SMatrix::from_column_slice(&x[1 + 2 * D..]),
+        }
+    }
+}
+
 /// Reproducing order: linear (the paper's default) or zeroth (B ≡ 0, exact angular momentum).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RkOrder {

@@ -20,7 +20,7 @@ use super::{smoothing, Scheme, SchemeError};
 use crate::kernel::{DimKernel, Kernel, KernelVisitor};
 use crate::neighbours::cut::{CutBlock, CutVisitor};
 use crate::neighbours::lanes::LANES;
-use crate::parallel::HaloField;
+use crate::parallel::rows;
 use crate::system::System;
 use crate::threads::LIGHT;
 use rayon::prelude::*;
@@ -227,7 +227,13 @@ impl<const D: usize> Scheme<D> for StandardSph {
                 smoothing::solve_density_and_h_weighted(sys, None, false);
                 // the cut reads the neighbours' h, the force their ρ and Ω (with an evolved
                 // ρ they come from the halo's own fields, refreshed whole before this pass)
-                sys.refresh_halo_fields(&[HaloField::H, HaloField::Rho, HaloField::Omega]);
+                let (sync, p) = (sys.halo_sync(), &mut sys.particles);
+                sync.refresh(vec![rows(&mut p.h), rows(&mut p.rho), rows(&mut p.omega)]);
+                if sync.distributed() {
+                    // a master list that serves the halo's h as its owners solved it (the
+                    // copies solved theirs from cut neighbourhoods)
+                    smoothing::update_master_list(sys);
+                }
             }
             DensityMode::Continuity => continuity_h(sys),
         }
@@ -245,7 +251,8 @@ impl<const D: usize> Scheme<D> for StandardSph {
                 finish_gradients(sys, &grads, self.balsara_slot, self.params.balsara);
                 sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
                 // the force reads the neighbours' Balsara factors
-                sys.refresh_halo_fields(&[HaloField::Extra(self.balsara_slot)]);
+                let (sync, p) = (sys.halo_sync(), &mut sys.particles);
+                sync.refresh(vec![rows(&mut p.extra_scalars[self.balsara_slot])]);
             }
         }
         force_pass(sys, &self.params, self.balsara_slot, self.form);
