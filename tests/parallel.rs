@@ -113,11 +113,10 @@ fn first_difference<const D: usize>(a: &Particles<D>, b: &Particles<D>) -> Optio
 
 /// The violent random periodic box (a disc crossing a moving background) after 50 steps on
 /// 1, 2 and 3 ranks: equal to the bit. A halo of the skin alone (no kernel support deep)
-/// must change them, or the comparison could not fail. (Standard SPH, rpSPH and CRKSPH
-/// refresh their halo's fields between passes, and their halo is one support deep; with
-/// those refreshes removed, standard SPH's and CRKSPH's particles changed, and CRKSPH's
-/// energy drift on 3 ranks grew from 1e-15 to 3e-7. With the skin, one support also gives
-/// the same particles for F1 on this box; its depth, 4, keeps a margin for sharper cases.)
+/// must change them, or the comparison could not fail. (Standard SPH, rpSPH, CRKSPH and
+/// Rosswog's F1–F4 refresh their halo's fields between passes, and their halo is one support
+/// deep; with those refreshes removed, the particles of standard SPH, CRKSPH and each of
+/// F1–F4 changed, and CRKSPH's energy drift on 3 ranks grew from 1e-15 to 3e-7.)
 fn same_on_1_2_3_ranks(scheme: &str) {
     let text = random_box(scheme, "", (0.04, 0.028));
     let (one, _, _) = run_on(&text, 1, 50);
@@ -154,6 +153,21 @@ fn crksph_is_bit_identical_on_1_2_3_ranks() {
 #[test]
 fn rosswog_f1_is_bit_identical_on_1_2_3_ranks() {
     same_on_1_2_3_ranks("name = \"rosswog-f1\"");
+}
+
+#[test]
+fn rosswog_f2_is_bit_identical_on_1_2_3_ranks() {
+    same_on_1_2_3_ranks("name = \"rosswog-f2\"");
+}
+
+#[test]
+fn rosswog_f3_is_bit_identical_on_1_2_3_ranks() {
+    same_on_1_2_3_ranks("name = \"rosswog-f3\"");
+}
+
+#[test]
+fn rosswog_f4_is_bit_identical_on_1_2_3_ranks() {
+    same_on_1_2_3_ranks("name = \"rosswog-f4\"");
 }
 
 /// Conservation on several ranks is as good as on one: CRKSPH's energy (compatible update,
@@ -243,6 +257,21 @@ fn a_tank_in_a_moving_frame_is_bit_identical_on_1_2_3_ranks() {
         crate::common::model_text("tank2d.toml").replace("spacing = 0.02", "spacing = 0.04")
     );
     boundary_case_same_on_1_2_3_ranks::<2>(&text, 60);
+}
+
+/// The same tank, at rest, with Rosswog's F1: walls make the first step repeat its h–ρ–P
+/// loop until X settles, and the ranks must agree on the number of passes (each refreshes
+/// the halo).
+#[test]
+fn a_tank_with_rosswog_f1_is_bit_identical_on_1_2_3_ranks() {
+    let text = crate::common::model_text("tank2d.toml")
+        .replace("spacing = 0.02", "spacing = 0.04")
+        .replace(
+            "name = \"standard\"\nalpha = 0.1\nbeta = 0.0\ndensity = \"continuity\"",
+            "name = \"rosswog-f1\"",
+        );
+    assert!(text.contains("rosswog-f1"));
+    boundary_case_same_on_1_2_3_ranks::<2>(&text, 40);
 }
 
 /// The 1D Kidder implosion, whose shell is driven at both ends (`[region.drive]`).

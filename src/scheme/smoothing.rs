@@ -7,6 +7,7 @@
 use crate::kernel::{DimKernel, Kernel, KernelVisitor};
 use crate::neighbours::lanes::{for_each_row, RowPass};
 use crate::neighbours::unpack;
+use crate::parallel::rows;
 use crate::system::System;
 
 /// Relative density tolerance of the h iteration (foundation issue; Rosswog §7.2).
@@ -135,6 +136,22 @@ fn solve<const D: usize>(
     sys.stats.h_solves += 1;
     sys.stats.total_pairs += (sys.verlet.list.total_pairs() as f64 * sys.stats.h_iterations) as u64;
     if compact {
+        sys.compact_neighbours();
+    }
+}
+
+/// A distributed run's halo after an h solve (`parallel::refresh`): h, ρ and Ω as their
+/// owners solved them (the copies solved theirs from cut neighbourhoods), a master list that
+/// serves them, and, when the solve had cut the working list (`recut`), the cut again (it
+/// reads the neighbours' h). Nothing on one process.
+pub fn refresh_halo_after_solve<const D: usize>(sys: &mut System<D>, recut: bool) {
+    let (sync, p) = (sys.halo_sync(), &mut sys.particles);
+    if !sync.distributed() {
+        return;
+    }
+    sync.refresh(vec![rows(&mut p.h), rows(&mut p.rho), rows(&mut p.omega)]);
+    update_master_list(sys);
+    if recut {
         sys.compact_neighbours();
     }
 }

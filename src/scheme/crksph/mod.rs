@@ -159,11 +159,7 @@ impl<const D: usize> Crksph<D> {
         if solve_h {
             self.ones.resize(n, 1.0);
             smoothing::solve_density_and_h_weighted(sys, Some(&self.ones), true);
-            if sync.distributed() {
-                // the halo's h as its owners solved it, and lists that serve it
-                sync.refresh(vec![rows(&mut sys.particles.h)]);
-                smoothing::update_lists(sys);
-            }
+            smoothing::refresh_halo_after_solve(sys, true);
         } else {
             // (h from h_next, which the halo computes from refreshed V and h as its owners do)
             smoothing::update_lists(sys);

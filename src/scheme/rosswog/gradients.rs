@@ -24,6 +24,21 @@ pub struct IaMatrix<const D: usize> {
     pub fallback: bool,
 }
 
+/// C and the fallback flag (as 0 or 1), for a distributed run's halo refresh.
+impl<const D: usize> crate::parallel::HaloRow for IaMatrix<D> {
+    const WIDTH: usize = D * D + 1;
+    fn put(&self, out: &mut Vec<f64>) {
+        out.extend_from_slice(self.c.as_slice());
+        out.push(f64::from(u8::from(self.fallback)));
+    }
+    fn take(x: &[f64]) -> Self {
+        Self {
+            c: SMatrix::from_column_slice(&x[..D * D]),
+            fallback: x[D * D] != 0.0,
+        }
+    }
+}
+
 /// R C R for the mirror image `code` (R flips the mirrored axes).
 pub fn reflect<const D: usize>(c: &SMatrix<f64, D, D>, code: u8) -> SMatrix<f64, D, D> {
     let mut out = *c;

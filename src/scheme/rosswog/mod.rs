@@ -18,7 +18,7 @@ pub mod gradients;
 pub mod sr;
 pub mod triggers;
 
-use super::smoothing::solve_density_and_h_weighted;
+use super::smoothing::{refresh_halo_after_solve, solve_density_and_h_weighted};
 use super::standard::check_range;
 use super::{Scheme, SchemeError};
 use crate::kernel::KernelName;
@@ -300,6 +300,8 @@ pub(crate) fn density_and_pressure<const D: usize>(
     // the wall condition reads the working list, so with bodies every pass compacts it
     let walls = !sys.bodies.is_empty();
     solve_density_and_h_weighted(sys, x.as_deref(), !again || walls);
+    // the next passes read the neighbours' h, ρ and Ω (and X from their P)
+    refresh_halo_after_solve(sys, !again || walls);
     pressures(sys)?;
     if !again {
         return Ok(x.unwrap_or_else(|| sys.particles.mass.clone()));
@@ -313,12 +315,20 @@ pub(crate) fn density_and_pressure<const D: usize>(
     for _ in 0..passes {
         let x = weights(sys, params).expect("X = P^k");
         solve_density_and_h_weighted(sys, Some(&x), true);
+        refresh_halo_after_solve(sys, true);
         pressures(sys)?;
-        let change = x
+        // over the owned particles and every rank: all ranks take the same passes (each
+        // refresh is a collective), as many as one process would
+        let own = sys.owned();
+        let mut change = [x[..own]
             .iter()
-            .zip(&prev)
+            .zip(&prev[..own])
             .map(|(a, b)| ((a - b) / a).abs())
-            .fold(0.0, f64::max);
+            .fold(0.0, f64::max)];
+        if let Some(ranks) = &sys.ranks {
+            ranks.max_in_place(&mut change);
+        }
+        let change = change[0];
         prev = x;
         if change <= 1e-10 {
             break;
@@ -358,7 +368,10 @@ fn dissipative_heating<const D: usize>(
 /// and the kernel-gradient fallbacks in the run statistics.
 pub(crate) fn ia_matrices<const D: usize>(sys: &mut System<D>) -> Vec<gradients::IaMatrix<D>> {
     let t0 = std::time::Instant::now();
-    let (mats, _grads, fallbacks) = gradients::ia_pass(sys);
+    let (mut mats, _grads, fallbacks) = gradients::ia_pass(sys);
+    // the forces read the neighbours' matrices (g_b, Eqs. 66/67)
+    sys.halo_sync()
+        .refresh(vec![crate::parallel::rows(&mut mats)]);
     sys.stats.ia_fallbacks = fallbacks;
     sys.stats.ia_fallbacks_total += fallbacks;
     sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
@@ -540,7 +553,18 @@ impl<const D: usize> Scheme<D> for Rosswog {
     }
 
     fn end_step(&mut self, sys: &mut System<D>, dt: f64) {
+        if self.params.triggers {
+            // the noise triggers read the neighbours' ∇·v (Eqs. 87–88)
+            let (sync, p) = (sys.halo_sync(), &mut sys.particles);
+            sync.refresh(vec![crate::parallel::rows(&mut p.div_v)]);
+        }
         self.trig.end_step(sys, &self.params, dt, None);
+    }
+
+    /// One support: the h–ρ–P loop, the IA matrices and the triggers refresh the halo's
+    /// fields between passes (`density_and_pressure`, `ia_matrices`, `end_step`).
+    fn halo_depth(&self) -> usize {
+        1
     }
 
     fn trigger_levels(&self) -> Option<TriggerLevels> {

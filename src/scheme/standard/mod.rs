@@ -227,13 +227,7 @@ impl<const D: usize> Scheme<D> for StandardSph {
                 smoothing::solve_density_and_h_weighted(sys, None, false);
                 // the cut reads the neighbours' h, the force their ρ and Ω (with an evolved
                 // ρ they come from the halo's own fields, refreshed whole before this pass)
-                let (sync, p) = (sys.halo_sync(), &mut sys.particles);
-                sync.refresh(vec![rows(&mut p.h), rows(&mut p.rho), rows(&mut p.omega)]);
-                if sync.distributed() {
-                    // a master list that serves the halo's h as its owners solved it (the
-                    // copies solved theirs from cut neighbourhoods)
-                    smoothing::update_master_list(sys);
-                }
+                smoothing::refresh_halo_after_solve(sys, false);
             }
             DensityMode::Continuity => continuity_h(sys),
         }
