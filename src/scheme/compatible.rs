@@ -62,6 +62,17 @@ pub fn entropy_weight(du_ij: f64, s_i: Option<f64>, s_j: Option<f64>) -> f64 {
     lower_share / sum
 }
 
+/// A distributed run's halo after a force pass whose energy comes from the compatible update
+/// (`parallel::refresh`): [`thermal_update`] reads the neighbours' v^{1/2} (eq 66), so their
+/// accelerations (and du/dt, for the stages) as their owners computed them.
+pub fn refresh_halo_accelerations<const D: usize>(sys: &mut System<D>) {
+    let (sync, p) = (sys.halo_sync(), &mut sys.particles);
+    sync.refresh(vec![
+        crate::parallel::rows(&mut p.acc),
+        crate::parallel::rows(&mut p.dudt),
+    ]);
+}
+
 /// u¹ = u⁰ + Σ_j f_ij (v_j^{1/2} − v_i^{1/2})·a_ij Δt (eqs 65–66), plus the exchange term of
 /// [`PairWork::exchange`] times Δt, for every particle. `v_half`
 /// holds (v⁰ + v¹)/2, `s0` the start-of-step entropy proxies; `frozen` particles keep the u

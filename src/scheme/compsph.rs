@@ -94,6 +94,7 @@ impl<const D: usize> Scheme<D> for Compsph<D> {
 
     fn evaluate(&mut self, sys: &mut System<D>) -> Result<(), SchemeError> {
         smoothing::solve_density_and_h(sys);
+        smoothing::refresh_halo_after_solve(sys, true);
         sys.update_eos();
         match &self.cullen {
             Some(cd) => cd.measure(sys),
@@ -155,7 +156,14 @@ impl<const D: usize> Scheme<D> for Compsph<D> {
         }
         self.work = work;
         paper_step::store(sys, t0, &out);
+        super::compatible::refresh_halo_accelerations(sys);
         Ok(())
+    }
+
+    /// One support: the halo's h, ρ and Ω are refreshed after the h solve, ∇·v inside the
+    /// switch's measure, and a with du/dt after the forces.
+    fn halo_depth(&self) -> usize {
+        1
     }
 
     fn end_step(&mut self, sys: &mut System<D>, dt: f64) {

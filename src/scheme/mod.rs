@@ -32,6 +32,9 @@ pub trait Scheme<const D: usize>: Send + Sync {
     /// predictor-corrector's final update.
     fn refresh(&mut self, sys: &mut System<D>) {
         smoothing::solve_density_and_h(sys);
+        // the next step starts from the halo's state (its entropy proxies enter the
+        // compatible energy update): as its owners solved it
+        smoothing::refresh_halo_after_solve(sys, true);
         sys.update_eos();
     }
     /// Hook after each completed step (switch evolution).

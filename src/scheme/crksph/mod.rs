@@ -243,9 +243,7 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
         .run(&mut work.acc);
         self.work = work;
         paper_step::store(sys, t0, &out);
-        // the compatible energy update reads the neighbours' v^{1/2}, so their a (eq 66)
-        let (sync, p) = (sys.halo_sync(), &mut sys.particles);
-        sync.refresh(vec![rows(&mut p.acc), rows(&mut p.dudt)]);
+        super::compatible::refresh_halo_accelerations(sys);
         Ok(())
     }
 

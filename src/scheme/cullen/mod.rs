@@ -169,6 +169,7 @@ impl<const D: usize> KernelVisitor<D> for Measure<'_, D> {
             })
             .collect();
         {
+            let sync = sys.halo_sync();
             let p = &mut sys.particles;
             let d = D as f64;
             for (i, g) in grads.iter().enumerate() {
@@ -178,6 +179,8 @@ impl<const D: usize> KernelVisitor<D> for Measure<'_, D> {
                 let s = (g + g.transpose()) * 0.5 - SMatrix::<f64, D, D>::identity() * (div / d);
                 p.extra_scalars[cd.shear2][i] = (s * s).trace();
             }
+            // ξ (F.4) sums the signs of the neighbours' ∇·v
+            sync.refresh(vec![crate::parallel::rows(&mut p.div_v)]);
         }
         let p = &sys.particles;
         let weight: Vec<f64> = (0..n).map(|j| p.div_v[j].signum() * p.mass[j]).collect();

@@ -125,6 +125,14 @@ impl<const D: usize> Psph<D> {
         }
         // (no pair pass here: the h solve counted its pairs)
         sys.stats.seconds_density += t0.elapsed().as_secs_f64();
+        // the force reads the neighbours' P, c and f_ij coefficients (G.7), h, ρ and Ω
+        let (sync, p) = (sys.halo_sync(), &mut sys.particles);
+        sync.refresh(vec![
+            crate::parallel::rows(&mut p.pressure),
+            crate::parallel::rows(&mut p.sound_speed),
+            crate::parallel::rows(&mut self.fcoef),
+        ]);
+        smoothing::refresh_halo_after_solve(sys, true);
         sys.apply_boundary_conditions();
     }
 }
@@ -170,11 +178,18 @@ impl<const D: usize> Scheme<D> for Psph<D> {
         work.exchange = out.iter().map(|o| o.exchange).collect();
         self.work = work;
         paper_step::store(sys, t0, &out);
+        super::compatible::refresh_halo_accelerations(sys);
         Ok(())
     }
 
     fn refresh(&mut self, sys: &mut System<D>) {
         self.state(sys);
+    }
+
+    /// One support: `state` refreshes the halo's h, ρ, Ω, P, c and f_ij, the switch's
+    /// measure its ∇·v, and `evaluate` a with du/dt after the forces.
+    fn halo_depth(&self) -> usize {
+        1
     }
 
     fn end_step(&mut self, sys: &mut System<D>, dt: f64) {

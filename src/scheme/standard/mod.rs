@@ -189,16 +189,11 @@ impl<const D: usize> Scheme<D> for StandardSph {
     }
 
     /// h and ρ (neighbours' positions), the working list's cut (their h), then the velocity
-    /// gradients on the cut rows, and the force (their ρ, P, Ω and Balsara factors). Without
-    /// the Cullen–Dehnen switch, `evaluate` refreshes the halo's h, ρ, Ω and Balsara factors
-    /// between those passes, so one support is deep enough; the switch's own passes
-    /// (`cullen`) read their neighbours' results without refreshes, and need three.
+    /// gradients on the cut rows, and the force (their ρ, P, Ω and Balsara factors).
+    /// `evaluate` refreshes the halo's h, ρ, Ω and Balsara factors between those passes (the
+    /// Cullen–Dehnen switch its ∇·v), so one support is deep enough.
     fn halo_depth(&self) -> usize {
-        if self.cullen.is_some() {
-            3
-        } else {
-            1
-        }
+        1
     }
 
     fn init(&mut self, sys: &mut System<D>) {
