@@ -61,7 +61,8 @@ pub trait Scheme<const D: usize>: Send + Sync {
         vec![]
     }
     /// How many kernel supports deep a distributed run's halo must be for this scheme's
-    /// owned particles to come out exactly as on one rank (`parallel::halo`): the length of
+    /// owned particles to come out exactly as on one rank (`parallel::halo`): 1 for a scheme
+    /// that refreshes the halo between its passes (`parallel::refresh`), else the length of
     /// its longest chain of passes in which each reads what the previous one computed for
     /// the neighbours, counting the working list's cut (it reads the neighbours' h) as one.
     fn halo_depth(&self) -> usize {
