@@ -37,6 +37,10 @@ pub struct EvalStats {
     /// Part of `seconds_neighbours` spent building master lists (the rest: validity checks
     /// and cutting the working list).
     pub seconds_list_builds: f64,
+    /// Part of `seconds_neighbours` spent cutting the working list from the master list,
+    /// with any pass that rides on the cut (standard SPH's velocity-gradient sums).
+    #[serde(default)]
+    pub seconds_cut: f64,
     pub seconds_density: f64,
     pub seconds_gradients: f64,
     pub seconds_forces: f64,
@@ -289,7 +293,9 @@ impl<const D: usize> System<D> {
     ) {
         let t0 = std::time::Instant::now();
         self.neighbours = cut::cut(self, out, visitor);
-        self.stats.seconds_neighbours += t0.elapsed().as_secs_f64();
+        let dt = t0.elapsed().as_secs_f64();
+        self.stats.seconds_neighbours += dt;
+        self.stats.seconds_cut += dt;
     }
 
     /// Reorder the particles (new index i = old index `perm[i]`) and carry the master list,

@@ -395,8 +395,8 @@ fn main() -> ExitCode {
                     );
                     let ph = s.phase_seconds;
                     println!(
-                        "time per phase: neighbours {:.2} s ({} list builds, {} for growing h: {:.2} s), density/h {:.2} s ({:.2} iterations), gradients {:.2} s, forces {:.2} s",
-                        ph[0], s.neighbour_list_builds, s.h_growth_rebuilds, s.list_build_seconds, ph[1], s.mean_h_iterations, ph[2], ph[3]
+                        "time per phase: neighbours {:.2} s ({} list builds in {:.2} s, {} of them for growing h; working-list cuts {:.2} s), density/h {:.2} s ({:.2} iterations), gradients {:.2} s, forces {:.2} s",
+                        ph[0], s.neighbour_list_builds, s.list_build_seconds, s.h_growth_rebuilds, s.cut_seconds, ph[1], s.mean_h_iterations, ph[2], ph[3]
                     );
                     print_balances(&s);
                     if let Some(e) = s.shock_tube {

@@ -136,6 +136,9 @@ pub struct RunSummary {
     /// `Balance`): the scheme's own error.
     pub momentum_residual: Option<f64>,
     pub list_build_seconds: f64,
+    /// Seconds cutting the working list (part of the neighbour phase, with what rides on it).
+    #[serde(default)]
+    pub cut_seconds: f64,
     pub neighbour_list_builds: u64,
     /// The builds of `neighbour_list_builds` made within an h solve because a smoothing
     /// length outgrew its listed reach (the rest: particles moved through the skin).
@@ -465,6 +468,7 @@ fn run_dim<const D: usize>(
             ]
         },
         list_build_seconds: sim.sys.stats.seconds_list_builds,
+        cut_seconds: sim.sys.stats.seconds_cut,
         ia_fallbacks: sim.sys.stats.ia_fallbacks_total,
         momentum_drift: {
             let dp: f64 = (0..3)
