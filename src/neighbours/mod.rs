@@ -209,20 +209,6 @@ impl NeighbourList {
         Self { offsets, entries }
     }
 
-    /// A copy whose row a is what `cut(a, &mut acc[a], row, out)` appends to `out` from the
-    /// row (used to drop the skin once smoothing lengths have converged, see [`cut`]),
-    /// chunked in parallel; `cut` may accumulate what it measured on the kept entries into
-    /// `acc[a]`, so a pass over the kept pairs can ride on the cut instead of walking the
-    /// lists again.
-    pub fn filtered_rows<T: Send>(
-        &self,
-        acc: &mut [T],
-        cut: impl Fn(usize, &mut T, &[u32], &mut Vec<u32>) + Sync,
-    ) -> Self {
-        let bound = |start: usize, end: usize| self.offsets[end] - self.offsets[start];
-        Self::from_rows_with(acc, bound, |a, t, out| cut(a, t, self.of(a), out))
-    }
-
     /// Sort every row by the neighbours' stable ids `id` (then image code), in parallel by
     /// rows: rows in an order that does not depend on how the particles are numbered make
     /// every per-particle sum independent of it (the distributed run sorts so, see
@@ -273,29 +259,16 @@ impl NeighbourList {
     /// Lists for n particles whose row a is written by `fill(a, out)` (appending to `out`),
     /// built in parallel chunks of rows and joined in order.
     fn from_rows(n: usize, fill: impl Fn(usize, &mut Vec<u32>) + Sync) -> Self {
-        Self::from_rows_with(&mut vec![(); n], |_, _| 0, |a, _, out| fill(a, out))
-    }
-
-    /// [`Self::from_rows`] with one accumulator per row (`acc.len()` rows), handed to
-    /// `fill(a, &mut acc[a], out)`; `bound(start, end)` is how many entries rows start..end
-    /// may hold at most (reserved at once rather than grown by doubling), 0 if unknown.
-    fn from_rows_with<T: Send>(
-        acc: &mut [T],
-        bound: impl Fn(usize, usize) -> usize + Sync,
-        fill: impl Fn(usize, &mut T, &mut Vec<u32>) + Sync,
-    ) -> Self {
-        let n = acc.len();
         let chunk_len = row_chunk(n);
-        let parts: Vec<(Vec<u32>, Vec<u32>)> = acc
-            .par_chunks_mut(chunk_len)
-            .enumerate()
-            .map(|(chunk, rows)| {
-                let start = chunk * chunk_len;
+        let parts: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(chunk_len))
+            .into_par_iter()
+            .map(|chunk| {
+                let rows = chunk * chunk_len..((chunk + 1) * chunk_len).min(n);
                 let mut counts = Vec::with_capacity(rows.len());
-                let mut out = Vec::with_capacity(bound(start, start + rows.len()));
-                for (i, t) in rows.iter_mut().enumerate() {
+                let mut out = Vec::new();
+                for a in rows {
                     let before = out.len();
-                    fill(start + i, t, &mut out);
+                    fill(a, &mut out);
                     counts.push((out.len() - before) as u32);
                 }
                 (counts, out)
@@ -304,7 +277,9 @@ impl NeighbourList {
         Self::concat(n, parts)
     }
 
-    fn concat(n: usize, parts: Vec<(Vec<u32>, Vec<u32>)>) -> Self {
+    /// The lists whose rows are the chunks' rows in order: each part holds its rows' entry
+    /// counts and their entries.
+    pub(crate) fn concat(n: usize, parts: Vec<(Vec<u32>, Vec<u32>)>) -> Self {
         let mut offsets = Vec::with_capacity(n + 1);
         offsets.push(0usize);
         let total: usize = parts.iter().map(|p| p.1.len()).sum();
@@ -353,6 +328,6 @@ pub fn brute_force<const D: usize>(
 /// and small enough that every thread gets several chunks. A fixed 1024 split the closed
 /// tank's 1,566 particles into two chunks of 1024 and 542, so a second thread could cut
 /// the cut of the working list by a third at most. The joined list does not depend on it.
-fn row_chunk(n: usize) -> usize {
+pub(crate) fn row_chunk(n: usize) -> usize {
     (n / (8 * rayon::current_num_threads())).clamp(64, 1024)
 }

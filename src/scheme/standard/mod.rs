@@ -310,15 +310,23 @@ struct GradientSums<const D: usize, K> {
 
 impl<const D: usize, K: Kernel + Copy> CutVisitor<D> for GradientSums<D, K> {
     type Acc = GradAcc<D>;
+    /// The lanes' ∇·v and ∇v terms.
+    type Scratch = GradLanes;
 
     /// (Index loops: a lane index reads several arrays at once.)
     #[inline(always)]
     #[allow(clippy::needless_range_loop)]
-    fn block(&self, _: &System<D>, _: usize, g: &mut GradAcc<D>, blk: &CutBlock) {
+    fn block(
+        &self,
+        _: &System<D>,
+        _: usize,
+        g: &mut GradAcc<D>,
+        blk: &CutBlock,
+        lanes: &mut GradLanes,
+    ) {
         let k = self.kernel;
         let hinv = g.hinv;
-        let mut div = [0.0; LANES];
-        let mut grad = [[[0.0; LANES]; 3]; 3];
+        let GradLanes { div, grad } = lanes;
         for i in 0..blk.lanes {
             let r = blk.r2[i].sqrt();
             let dwdr = k.dwdr_hinv(r, hinv);
@@ -352,6 +360,22 @@ impl<const D: usize, K: Kernel + Copy> CutVisitor<D> for GradientSums<D, K> {
                     g.grad[(r, c)] += grad[r][c][i];
                 }
             }
+        }
+    }
+}
+
+/// [`GradientSums`]' lane terms (every lane the compute loop reaches is written before the
+/// sum reads it).
+pub struct GradLanes {
+    div: [f64; LANES],
+    grad: [[[f64; LANES]; 3]; 3],
+}
+
+impl Default for GradLanes {
+    fn default() -> Self {
+        Self {
+            div: [0.0; LANES],
+            grad: [[[0.0; LANES]; 3]; 3],
         }
     }
 }
