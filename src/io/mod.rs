@@ -8,6 +8,33 @@ use std::fmt::Write as _;
 use std::io::{self, Write};
 use std::path::Path;
 
+/// Append `row(i, out)` for i in 0..n to `s`, in order, the rows formatted in parallel
+/// chunks: formatting floats was most of a snapshot's cost (0.14 s per snapshot of the
+/// 148,632-particle 3D Sod on one thread), and a run's wall clock includes its snapshots.
+/// The bytes do not depend on the chunking.
+fn push_rows(s: &mut String, n: usize, row: impl Fn(usize, &mut String) + Sync) {
+    use rayon::prelude::*;
+    const CHUNK: usize = 4096;
+    let parts: Vec<String> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut out = String::new();
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                row(i, &mut out);
+            }
+            out
+        })
+        .collect();
+    for part in parts {
+        s.push_str(&part);
+    }
+}
+
+/// A particle vector's three components (zeros past D).
+fn xyz<const D: usize>(x: &crate::particles::Vector<D>) -> [f64; 3] {
+    std::array::from_fn(|k| if k < D { x[k] } else { 0.0 })
+}
+
 fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
     let tmp = path.with_extension("tmp");
     std::fs::write(&tmp, bytes)?;
@@ -23,10 +50,10 @@ pub fn write_vtu<const D: usize>(path: &Path, p: &Particles<D>, time: f64) -> io
     let _ = writeln!(s, "<FieldData><DataArray type=\"Float64\" Name=\"TIME\" NumberOfTuples=\"1\" format=\"ascii\">{time:e}</DataArray></FieldData>");
     let _ = writeln!(s, "<Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{n}\">");
     s.push_str("<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
-    for x in &p.pos {
-        let c: Vec<f64> = (0..3).map(|k| if k < D { x[k] } else { 0.0 }).collect();
+    push_rows(&mut s, n, |i, s| {
+        let c = xyz(&p.pos[i]);
         let _ = writeln!(s, "{:e} {:e} {:e}", c[0], c[1], c[2]);
-    }
+    });
     s.push_str("</DataArray></Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
     for i in 0..n {
         let _ = write!(s, "{i} ");
@@ -41,10 +68,10 @@ pub fn write_vtu<const D: usize>(path: &Path, p: &Particles<D>, time: f64) -> io
     }
     s.push_str("\n</DataArray>\n</Cells>\n<PointData Scalars=\"density\" Vectors=\"velocity\">\n");
     s.push_str("<DataArray type=\"Float64\" Name=\"velocity\" NumberOfComponents=\"3\" format=\"ascii\">\n");
-    for v in &p.vel {
-        let c: Vec<f64> = (0..3).map(|k| if k < D { v[k] } else { 0.0 }).collect();
+    push_rows(&mut s, n, |i, s| {
+        let c = xyz(&p.vel[i]);
         let _ = writeln!(s, "{:e} {:e} {:e}", c[0], c[1], c[2]);
-    }
+    });
     s.push_str("</DataArray>\n");
     let scalars: [(&str, &Vec<f64>); 6] = [
         ("density", &p.rho),
@@ -59,9 +86,9 @@ pub fn write_vtu<const D: usize>(path: &Path, p: &Particles<D>, time: f64) -> io
             s,
             "<DataArray type=\"Float64\" Name=\"{name}\" format=\"ascii\">"
         );
-        for v in data.iter() {
-            let _ = write!(s, "{v:e} ");
-        }
+        push_rows(&mut s, n, |i, s| {
+            let _ = write!(s, "{:e} ", data[i]);
+        });
         s.push_str("\n</DataArray>\n");
     }
     s.push_str("<DataArray type=\"UInt32\" Name=\"id\" format=\"ascii\">\n");
@@ -128,7 +155,6 @@ pub fn write_pvtu(path: &Path, pieces: &[String], time: f64) -> io::Result<()> {
     write_atomic(path, s.as_bytes())
 }
 
-/// Snapshot as CSV with columns x,y,z,vx,vy,vz,m,h,rho,u,P,cs,id,material (sarracen/pandas names).
 /// A ParaView collection (`.pvd`): the VTU files (names relative to it) at their times, so
 /// they open as one time series.
 pub fn write_pvd(path: &Path, entries: &[(f64, String)]) -> io::Result<()> {
@@ -144,21 +170,21 @@ pub fn write_pvd(path: &Path, entries: &[(f64, String)]) -> io::Result<()> {
     std::fs::write(path, s)
 }
 
+/// Snapshot as CSV with columns x,y,z,vx,vy,vz,m,h,rho,u,P,cs,id,material (sarracen/pandas names).
 pub fn write_csv<const D: usize>(path: &Path, p: &Particles<D>) -> io::Result<()> {
     let mut s = String::with_capacity(p.len() * 160);
     s.push_str(&csv_header(D));
-    for i in 0..p.len() {
-        let x = |k: usize| if k < D { p.pos[i][k] } else { 0.0 };
-        let v = |k: usize| if k < D { p.vel[i][k] } else { 0.0 };
+    push_rows(&mut s, p.len(), |i, s| {
+        let (x, v) = (xyz(&p.pos[i]), xyz(&p.vel[i]));
         let _ = writeln!(
             s,
             "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{}",
-            x(0),
-            x(1),
-            x(2),
-            v(0),
-            v(1),
-            v(2),
+            x[0],
+            x[1],
+            x[2],
+            v[0],
+            v[1],
+            v[2],
             p.mass[i],
             p.h[i],
             p.rho[i],
@@ -168,7 +194,7 @@ pub fn write_csv<const D: usize>(path: &Path, p: &Particles<D>) -> io::Result<()
             p.id[i],
             p.material[i]
         );
-    }
+    });
     write_atomic(path, s.as_bytes())
 }
 
