@@ -15,7 +15,7 @@
 //! ([`NoVisit`]) also fills v_ab and m_b, which only a visitor reads.
 
 use super::lanes::{fill_pair, padded, Wide, Width, LANES};
-use super::{row_chunk, unpack, NeighbourList};
+use super::{unpack, NeighbourList};
 use crate::particles::Vector;
 use crate::system::System;
 use crate::threads::LIGHT;
@@ -115,22 +115,16 @@ pub fn cut<const D: usize, V: CutVisitor<D>>(
         .collect();
     let wide = Width::detect();
     let list = &sys.verlet.list;
-    let chunk_len = row_chunk(n);
-    let parts: Vec<(Vec<u32>, Vec<u32>)> = out
-        .par_chunks_mut(chunk_len)
-        .enumerate()
-        .map(|(chunk, accs)| {
-            wide.run(CutRows {
-                sys,
-                recs: &recs,
-                visitor,
-                start: chunk * chunk_len,
-                accs,
-                list,
-            })
+    NeighbourList::from_chunks(out, |start, accs| {
+        wide.run(CutRows {
+            sys,
+            recs: &recs,
+            visitor,
+            start,
+            accs,
+            list,
         })
-        .collect();
-    NeighbourList::concat(n, parts)
+    })
 }
 
 /// One chunk of rows: its entry counts and kept entries. The lane arrays live in `run`'s

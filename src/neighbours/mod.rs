@@ -259,27 +259,39 @@ impl NeighbourList {
     /// Lists for n particles whose row a is written by `fill(a, out)` (appending to `out`),
     /// built in parallel chunks of rows and joined in order.
     fn from_rows(n: usize, fill: impl Fn(usize, &mut Vec<u32>) + Sync) -> Self {
+        Self::from_chunks(&mut vec![(); n], |start, rows| {
+            let mut counts = Vec::with_capacity(rows.len());
+            let mut out = Vec::new();
+            for a in start..start + rows.len() {
+                let before = out.len();
+                fill(a, &mut out);
+                counts.push((out.len() - before) as u32);
+            }
+            (counts, out)
+        })
+    }
+
+    /// Lists for `acc.len()` particles built in parallel chunks of rows ([`row_chunk`]) and
+    /// joined in order: `chunk(start, &mut acc[start..])` returns the entry counts and the
+    /// entries of rows `start..start + its slice's length`, and may accumulate into their
+    /// slots of `acc`.
+    pub(crate) fn from_chunks<T: Send>(
+        acc: &mut [T],
+        chunk: impl Fn(usize, &mut [T]) -> (Vec<u32>, Vec<u32>) + Sync,
+    ) -> Self {
+        let n = acc.len();
         let chunk_len = row_chunk(n);
-        let parts: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(chunk_len))
-            .into_par_iter()
-            .map(|chunk| {
-                let rows = chunk * chunk_len..((chunk + 1) * chunk_len).min(n);
-                let mut counts = Vec::with_capacity(rows.len());
-                let mut out = Vec::new();
-                for a in rows {
-                    let before = out.len();
-                    fill(a, &mut out);
-                    counts.push((out.len() - before) as u32);
-                }
-                (counts, out)
-            })
+        let parts: Vec<(Vec<u32>, Vec<u32>)> = acc
+            .par_chunks_mut(chunk_len)
+            .enumerate()
+            .map(|(c, rows)| chunk(c * chunk_len, rows))
             .collect();
         Self::concat(n, parts)
     }
 
     /// The lists whose rows are the chunks' rows in order: each part holds its rows' entry
     /// counts and their entries.
-    pub(crate) fn concat(n: usize, parts: Vec<(Vec<u32>, Vec<u32>)>) -> Self {
+    fn concat(n: usize, parts: Vec<(Vec<u32>, Vec<u32>)>) -> Self {
         let mut offsets = Vec::with_capacity(n + 1);
         offsets.push(0usize);
         let total: usize = parts.iter().map(|p| p.1.len()).sum();
@@ -328,6 +340,6 @@ pub fn brute_force<const D: usize>(
 /// and small enough that every thread gets several chunks. A fixed 1024 split the closed
 /// tank's 1,566 particles into two chunks of 1024 and 542, so a second thread could cut
 /// the cut of the working list by a third at most. The joined list does not depend on it.
-pub(crate) fn row_chunk(n: usize) -> usize {
+fn row_chunk(n: usize) -> usize {
     (n / (8 * rayon::current_num_threads())).clamp(64, 1024)
 }
