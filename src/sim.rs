@@ -185,15 +185,22 @@ impl<const D: usize> Simulation<D> {
     /// The step the stability criteria allow now (on every rank, in a distributed run: a
     /// failed agreement gives NaN, which stops the run as a collapsed step).
     pub fn stable_dt(&self) -> f64 {
-        let dt = self.local_stable_dt();
-        match &self.layout {
+        self.stable_dt_and_cause().0
+    }
+
+    /// [`Self::stable_dt`], and whether the scheme's own limit ([`Scheme::step_limit`]) set
+    /// it on this process.
+    fn stable_dt_and_cause(&self) -> (f64, bool) {
+        let (dt, by_scheme) = self.local_stable_dt();
+        let agreed = match &self.layout {
             Some(l) => l.agree_dt(dt).unwrap_or(f64::NAN),
             None => dt,
-        }
+        };
+        (agreed, by_scheme && agreed == dt)
     }
 
     /// [`Self::stable_dt`] over this process's own particles.
-    fn local_stable_dt(&self) -> f64 {
+    fn local_stable_dt(&self) -> (f64, bool) {
         let p = &self.sys.particles;
         let c = &self.control;
         let mut dt = (0..self.sys.owned())
@@ -216,7 +223,8 @@ impl<const D: usize> Simulation<D> {
         if self.last_dt > 0.0 {
             dt = dt.min(c.max_growth * self.last_dt);
         }
-        dt
+        let own = self.scheme.step_limit(&self.sys);
+        (dt.min(own), own < dt)
     }
 
     fn check_finite(&self) -> Result<(), SolverError> {
@@ -233,12 +241,18 @@ impl<const D: usize> Simulation<D> {
 
     /// One step of at most `dt_cap`. Returns the step taken.
     pub fn step(&mut self, dt_cap: f64) -> Result<f64, SolverError> {
-        let stable = self.stable_dt();
+        let stable = self.stable_dt_and_cause();
         self.step_with(stable, dt_cap)
     }
 
     /// [`Self::step`] with the stability limit already computed.
-    fn step_with(&mut self, stable: f64, dt_cap: f64) -> Result<f64, SolverError> {
+    /// `stable` comes with whether the scheme's own limit set it (counted in the stats when
+    /// the step is that long).
+    fn step_with(&mut self, stable: (f64, bool), dt_cap: f64) -> Result<f64, SolverError> {
+        let (stable, by_scheme) = stable;
+        if by_scheme && stable <= dt_cap {
+            self.sys.stats.steps_set_by_scheme += 1;
+        }
         let mut dt = stable.min(dt_cap);
         if !(dt.is_finite()) {
             dt = dt_cap;
@@ -342,13 +356,13 @@ impl<const D: usize> Simulation<D> {
         while self.time < t {
             let remaining = t - self.time;
             // Avoid a sliver step: split the last two steps evenly.
-            let stable = self.stable_dt();
+            let (stable, by_scheme) = self.stable_dt_and_cause();
             let cap = if remaining > stable && remaining < 2.0 * stable {
                 0.5 * remaining
             } else {
                 remaining
             };
-            self.step_with(stable, cap)?;
+            self.step_with((stable, by_scheme), cap)?;
             if (t - self.time).abs() <= 1e-12 * t.abs().max(1.0) {
                 self.time = t;
             }

@@ -55,6 +55,10 @@ pub struct EvalStats {
     pub sr_recovery_max_iterations: u64,
     #[serde(default)]
     pub sr_recovery_fallbacks: u64,
+    /// Steps whose length the scheme's own limit set ([`crate::scheme::Scheme::step_limit`]:
+    /// the SR light-cone margin), not the Courant or force criteria.
+    #[serde(default)]
+    pub steps_set_by_scheme: u64,
 }
 
 /// One neighbour seen from particle a.

@@ -215,8 +215,8 @@ fn print_balances(s: &sphfmu::runner::RunSummary) {
     );
     if let Some(r) = &s.relativistic {
         println!(
-            "special relativity: largest Lorentz factor {:.4}; {} primitive recoveries, {:.2} Newton-Raphson iterations on average, {} at most, {} fell back to the cold state",
-            r.max_lorentz, r.recoveries, r.mean_iterations, r.max_iterations, r.fallbacks
+            "special relativity: largest Lorentz factor {:.4}; {} primitive recoveries, {:.2} Newton-Raphson iterations on average, {} at most, {} fell back to the cold state; the light-cone margin shortened {} steps",
+            r.max_lorentz, r.recoveries, r.mean_iterations, r.max_iterations, r.fallbacks, r.light_cone_steps
         );
     }
     if with_gravity {

@@ -159,6 +159,9 @@ pub struct RecoverySummary {
     pub fallbacks: u64,
     /// The largest Lorentz factor at the end and over the recorded diagnostics.
     pub max_lorentz: f64,
+    /// Steps the light-cone margin shortened below the Courant and force criteria
+    /// (`recovery::light_cone_step`).
+    pub light_cone_steps: u64,
 }
 
 /// Which external impulses act on the fluid, and so what its momentum change means.
@@ -499,6 +502,7 @@ fn run_dim<const D: usize>(
                 max_iterations: st.sr_recovery_max_iterations,
                 fallbacks: st.sr_recovery_fallbacks,
                 max_lorentz: max_lorentz.max(last.max_lorentz),
+                light_cone_steps: st.steps_set_by_scheme,
             }
         }),
     };

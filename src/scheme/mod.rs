@@ -37,6 +37,11 @@ pub trait Scheme<const D: usize>: Send + Sync {
         smoothing::refresh_halo_after_solve(sys, true);
         sys.update_eos();
     }
+    /// The longest step this scheme's own state allows, over the owned particles, on top of
+    /// the driver's Courant and force criteria (∞: no limit of its own).
+    fn step_limit(&self, _sys: &System<D>) -> f64 {
+        f64::INFINITY
+    }
     /// Hook after each completed step (switch evolution).
     fn end_step(&mut self, _sys: &mut System<D>, _dt: f64) {}
     /// The dissipation triggers' levels after the latest step, for schemes that have them

@@ -351,6 +351,28 @@ impl<const D: usize> Scheme<D> for RosswogSr {
         });
     }
 
+    /// Keep every particle's forward-Euler step inside the states a recovery can invert
+    /// ([`recovery::light_cone_step`]; our addition to the paper's step rule).
+    fn step_limit(&self, sys: &System<D>) -> f64 {
+        let p = &sys.particles;
+        let s = &p.extra_vectors[self.slots.momentum];
+        let eps = &p.extra_scalars[self.slots.energy];
+        (0..sys.owned())
+            .into_par_iter()
+            .with_min_len(crate::threads::LIGHT)
+            .map(|a| {
+                let (sd, ed) = (&p.acc[a], p.dudt[a]);
+                recovery::light_cone_step(
+                    eps[a],
+                    s[a].norm_squared(),
+                    ed,
+                    s[a].dot(sd),
+                    sd.norm_squared(),
+                )
+            })
+            .reduce(|| f64::INFINITY, f64::min)
+    }
+
     fn end_step(&mut self, sys: &mut System<D>, dt: f64) {
         let lorentz = sys.particles.extra_scalars[self.slots.lorentz].clone();
         self.trig.end_step(sys, &self.params, dt, Some(&lorentz));

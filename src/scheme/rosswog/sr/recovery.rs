@@ -90,6 +90,52 @@ pub fn signal_speed(v_par: f64, v2: f64, c: f64) -> f64 {
     plus.max(0.0).max(-minus)
 }
 
+/// The longest step for which one forward-Euler step of a particle's conserved state per
+/// baryon, (ε, S) → (ε + t ε̇, S + t Ṡ), keeps at least half of its margin to the edge of the
+/// states a recovery can invert (our addition: the paper's step rule, Sec. 6.5, has no such
+/// term; see below). ∞ when the step moves the state away from that edge.
+///
+/// The margin: for Γ ≤ 2 every physical state has ε² − |S|² = E(1 + (2 − Γ)u) + (P/N)² ≥ 1
+/// (from Eqs. 54, 57, 59 with P = (Γ − 1) n u), and {ε ≥ √(1 + |S|²)} is convex, so
+/// q = ε² − |S|² − 1 ≥ 0 is the room left before a recovery must floor u (the cold
+/// fallback). A state already past it (floored) keeps the hard edge instead, ε > |S|, with
+/// margin q + 1: beyond that no velocity below c exists and the run stops. SSP-RK3's stages
+/// are convex combinations of forward-Euler steps of the same length, so a step that keeps
+/// each Euler step inside the convex set keeps the stages inside it too (to the extent the
+/// first stage's derivatives speak for the later ones).
+///
+/// Why it is needed, measured on the extreme Riemann II (`models/verify/sr-riemann2.toml`
+/// at v = ±0.9995, 10K particles on [−1, 1], F1 with K_min = 1): a cold stream (u = 2.3e-5,
+/// so q ≈ 5e-5) decelerating by ΔS ≈ 1.6 per step loses ΔS²/γ² ≈ 2.6e-3 of q to the Euler
+/// step's curvature alone. With the force-step factor 0.25 the run floored u in the
+/// precursor, went noisy and stopped at t = 0.19 with |S| ≥ ε; with 0.2 it ran with 3074
+/// cold-state fallbacks; with 0.15 it ran clean.
+///
+/// Solved exactly: g(t) = m/2 + 2Bt + Ct² ≥ 0 with B = ε ε̇ − S·Ṡ and C = ε̇² − |Ṡ|²; the
+/// answer is g's smallest positive root, A/(−B + √(B² − AC)) with A = m/2, in the form
+/// that does not cancel.
+pub fn light_cone_step(eps: f64, s2: f64, eps_dot: f64, s_dot_sdot: f64, sdot2: f64) -> f64 {
+    let q = eps * eps - s2 - 1.0;
+    let margin = if q > 0.0 { q } else { q + 1.0 };
+    if !(margin > 0.0) || !eps.is_finite() {
+        // nothing left to keep: the recovery reports the state
+        return f64::INFINITY;
+    }
+    let a = 0.5 * margin;
+    let b = eps * eps_dot - s_dot_sdot;
+    let c = eps_dot * eps_dot - sdot2;
+    let disc = b * b - a * c;
+    if !(disc >= 0.0) {
+        return f64::INFINITY;
+    }
+    let den = -b + disc.sqrt();
+    if den > 0.0 {
+        a / den
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// Why a state has no primitive counterpart.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RecoveryError(pub String);
@@ -364,6 +410,40 @@ mod tests {
         assert!(recover(g, 1.0, -1.0, 1.0, None).is_err());
         assert!(recover(g, f64::NAN, 1.0, 1.0, None).is_err());
         assert!(recover(g, 0.1, 1.0, 0.0, None).is_err());
+    }
+
+    /// The light-cone step: a cold stream at γ = 31.6 decelerating (the extreme Riemann II's
+    /// precursor) may step until the Euler state keeps half its margin, which it then does to
+    /// round-off, and recovers without the cold fallback; ten times that step floors it. A
+    /// state that only heats, or that drifts without force, gets no limit.
+    #[test]
+    fn light_cone_step_keeps_half_the_margin() {
+        let g = 5.0 / 3.0;
+        let (n, u, v) = (1.0, 2.29e-5, 0.9995);
+        let c = conserved(g, n, u, v * v);
+        let (s, eps, big_n) = (c.s_over_v * v, c.eps, c.lorentz * n);
+        let q = eps * eps - s * s - 1.0;
+        // decelerating: dS/dt = −3300 (measured at that precursor), dε/dt = v dS/dt
+        let (sd, ed) = (-3300.0, v * -3300.0);
+        let t = light_cone_step(eps, s * s, ed, s * sd, sd * sd);
+        assert!(t.is_finite() && t > 0.0);
+        let margin = |k: f64| {
+            let (e1, s1) = (eps + k * t * ed, s + k * t * sd);
+            e1 * e1 - s1 * s1 - 1.0
+        };
+        assert!((margin(1.0) - 0.5 * q).abs() <= 1e-6 * q, "{} vs {}", margin(1.0), 0.5 * q);
+        let after = |k: f64| recover(g, s + k * t * sd, eps + k * t * ed, big_n, None);
+        assert!(!after(1.0).unwrap().floored);
+        assert!(after(10.0).map_or(true, |r| r.floored));
+        // heating at rest in S, and free drift: no limit
+        assert_eq!(light_cone_step(eps, s * s, 1.0, 0.0, 0.0), f64::INFINITY);
+        assert_eq!(light_cone_step(eps, s * s, 0.0, 0.0, 0.0), f64::INFINITY);
+        // a floored state (q < 0) keeps the hard edge ε > |S|
+        let (e0, s0) = (31.0f64, 30.99f64);
+        assert!(e0 * e0 - s0 * s0 < 1.0);
+        let t_hard = light_cone_step(e0, s0 * s0, 0.0, s0 * 10.0, 100.0);
+        let s1 = s0 + 10.0 * t_hard;
+        assert!((e0 * e0 - s1 * s1 - 0.5 * (e0 * e0 - s0 * s0)).abs() < 1e-12 * e0 * e0);
     }
 
     /// Eq. 63 and Eq. 79 in the Newtonian limit (c_s² → Γ(Γ − 1)u, λ± → v∥ ± c_s) and in 1D
