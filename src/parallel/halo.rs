@@ -174,29 +174,34 @@ impl Link {
         pack: &dyn Fn(&[u32]) -> Vec<f64>,
     ) -> Result<Vec<f64>, String> {
         let t0 = std::time::Instant::now();
-        let plan = self.plan.lock().unwrap_or_else(|e| e.into_inner()).clone();
         let me = self.comm.rank();
-        let send: Vec<Vec<u8>> = plan
-            .send
-            .iter()
-            .enumerate()
-            .map(|(r, pick)| {
-                if r == me || pick.is_empty() {
-                    vec![]
-                } else {
-                    super::comm::f64_bytes(&pack(pick))
-                }
-            })
-            .collect();
+        // packed under the plan's lock, so only the receive counts are copied out of it (not
+        // the send index lists, 3–5 times per evaluation)
+        let (send, recv): (Vec<Vec<u8>>, Vec<usize>) = {
+            let plan = self.plan.lock().unwrap_or_else(|e| e.into_inner());
+            let send = plan
+                .send
+                .iter()
+                .enumerate()
+                .map(|(r, pick)| {
+                    if r == me || pick.is_empty() {
+                        vec![]
+                    } else {
+                        super::comm::f64_bytes(&pack(pick))
+                    }
+                })
+                .collect();
+            (send, plan.recv.clone())
+        };
         let bytes: usize = send.iter().map(|b| b.len()).sum();
         let messages = send.iter().filter(|b| !b.is_empty()).count();
         let got = self.comm.all_to_all(send).map_err(|e| e.to_string())?;
-        let mut out = Vec::with_capacity(plan.recv.iter().sum::<usize>() * width);
+        let mut out = Vec::with_capacity(recv.iter().sum::<usize>() * width);
         for (r, b) in got.iter().enumerate() {
             if r == me {
                 continue;
             }
-            let want = plan.recv.get(r).copied().unwrap_or(0) * width;
+            let want = recv.get(r).copied().unwrap_or(0) * width;
             if b.len() != want * 8 {
                 return Err(format!(
                     "rank {r} sent {} halo values, {want} expected",
@@ -215,19 +220,22 @@ impl Link {
 
     /// Overwrite the halo copies with their owners' current particles (every field).
     pub fn refresh_halo<const D: usize>(&self, sys: &mut System<D>) -> Result<(), String> {
-        let plan = self.plan.lock().unwrap_or_else(|e| e.into_inner()).clone();
-        let parts = plan
-            .send
-            .iter()
-            .map(|pick| Some(sys.particles.selected(pick)))
-            .collect();
+        let (parts, recv) = {
+            let plan = self.plan.lock().unwrap_or_else(|e| e.into_inner());
+            let parts = plan
+                .send
+                .iter()
+                .map(|pick| Some(sys.particles.selected(pick)))
+                .collect();
+            (parts, plan.recv.clone())
+        };
         let got = self.exchange(parts)?;
         let mut at = sys.owned();
         for (r, part) in got.iter().enumerate() {
             if r == self.comm.rank() {
                 continue;
             }
-            let want = plan.recv.get(r).copied().unwrap_or(0);
+            let want = recv.get(r).copied().unwrap_or(0);
             if part.len() != want {
                 return Err(format!(
                     "rank {r} sent {} halo particles, {want} expected",
