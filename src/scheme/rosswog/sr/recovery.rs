@@ -431,7 +431,12 @@ mod tests {
             let (e1, s1) = (eps + k * t * ed, s + k * t * sd);
             e1 * e1 - s1 * s1 - 1.0
         };
-        assert!((margin(1.0) - 0.5 * q).abs() <= 1e-6 * q, "{} vs {}", margin(1.0), 0.5 * q);
+        assert!(
+            (margin(1.0) - 0.5 * q).abs() <= 1e-6 * q,
+            "{} vs {}",
+            margin(1.0),
+            0.5 * q
+        );
         let after = |k: f64| recover(g, s + k * t * sd, eps + k * t * ed, big_n, None);
         assert!(!after(1.0).unwrap().floored);
         assert!(after(10.0).map_or(true, |r| r.floored));
