@@ -117,7 +117,7 @@ pub fn signal_speed(v_par: f64, v2: f64, c: f64) -> f64 {
 pub fn light_cone_step(eps: f64, s2: f64, eps_dot: f64, s_dot_sdot: f64, sdot2: f64) -> f64 {
     let q = eps * eps - s2 - 1.0;
     let margin = if q > 0.0 { q } else { q + 1.0 };
-    if !(margin > 0.0) || !eps.is_finite() {
+    if margin.is_nan() || margin <= 0.0 || !eps.is_finite() {
         // nothing left to keep: the recovery reports the state
         return f64::INFINITY;
     }
@@ -125,7 +125,7 @@ pub fn light_cone_step(eps: f64, s2: f64, eps_dot: f64, s_dot_sdot: f64, sdot2: 
     let b = eps * eps_dot - s_dot_sdot;
     let c = eps_dot * eps_dot - sdot2;
     let disc = b * b - a * c;
-    if !(disc >= 0.0) {
+    if disc.is_nan() || disc < 0.0 {
         return f64::INFINITY;
     }
     let den = -b + disc.sqrt();
