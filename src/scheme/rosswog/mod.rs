@@ -81,6 +81,11 @@ pub struct RosswogParams {
     /// (2015) §7.7.1 starts the KH runs with "K_a = 1 for t < 0.5"); 0: triggered from the
     /// start.
     pub k_constant_until: f64,
+    /// Keep the conduction part of the Chow–Monaghan dissipation (Rosswog (2015) Eqs. 70–75:
+    /// the jumps in e* (Newtonian: u) and, in SR, in S* and ε* through the enthalpy);
+    /// false dissipates only the velocity jump. Our option, for hot contacts moving at high
+    /// γ, where the paper's form is unstable (see `sr::dissipation_jumps`).
+    pub conduction: bool,
 }
 
 impl RosswogParams {
@@ -118,6 +123,7 @@ impl Preset {
             k_min: 0.0,
             signal_velocity: SignalVelocity::Galilean,
             k_constant_until: 0.0,
+            conduction: true,
         };
         match self {
             Preset::F1 => base,
@@ -162,6 +168,7 @@ pub struct RosswogOverrides {
     pub k_min: Option<f64>,
     pub signal_velocity: Option<SignalVelocity>,
     pub k_constant_until: Option<f64>,
+    pub conduction: Option<bool>,
 }
 
 impl RosswogOverrides {
@@ -179,6 +186,7 @@ impl RosswogOverrides {
             k_min: self.k_min.unwrap_or(b.k_min),
             signal_velocity: self.signal_velocity.unwrap_or(b.signal_velocity),
             k_constant_until: self.k_constant_until.unwrap_or(b.k_constant_until),
+            conduction: self.conduction.unwrap_or(b.conduction),
         }
     }
 
@@ -469,6 +477,7 @@ impl<const D: usize> Scheme<D> for Rosswog {
         let n = sys.particles.len();
         let ia = self.params.gradient == GradientOperator::IntegralApproximation;
         let literal = self.params.signal_velocity == SignalVelocity::Literal;
+        let conduction = if self.params.conduction { 1.0 } else { 0.0 };
         let p = &sys.particles;
         let recs: Vec<Rec<D>> = (0..n)
             .into_par_iter()
@@ -530,7 +539,7 @@ impl<const D: usize> Scheme<D> for Rosswog {
                         * dissipative_heating(
                             kab * vsig / rho_bar,
                             pi,
-                            ra.u - rb.u,
+                            conduction * (ra.u - rb.u),
                             &vab,
                             &e,
                             &dab,

@@ -208,6 +208,49 @@ fn projected(v_par: f64, enthalpy: f64, p_over_n: f64) -> (f64, f64) {
     (gs * enthalpy * v_par, gs * enthalpy - p_over_n)
 }
 
+/// The jumps (S*_a − S*_b)·ê and ε*_a − ε*_b that the dissipation of an approaching pair
+/// acts on (Rosswog (2015) Eqs. 70–75), from each particle's velocity along ê and record.
+///
+/// With `conduction` (the default, the paper's form) each particle's own enthalpy E_k and
+/// P_k/N_k enter S*_k and ε*_k, so a pair moving at one velocity still exchanges energy and
+/// momentum in proportion to its enthalpy jump: a conduction. Without it the pair-mean Ē and
+/// P/N enter both, so only γ*_k and v_k·ê differ: a relativistic viscosity alone (Newtonian
+/// limit: Π ∝ the approach speed w, ε*-jump ½(v_a·ê)² − ½(v_b·ê)²; the Newtonian presets
+/// drop their kv (u_a − u_b) term to match).
+///
+/// Why the option (our decision; the paper has only the first form). Advection I (§7.5) with
+/// X = ν: a hot contact (E = 443 inside the triangle, 222 outside) moving at γ = 70.7. The
+/// X = ν pressure blip there sets particles moving, pairs across the contact approach, and
+/// the conduction acts. For a pair across the flow (v·ê ≈ 0, γ* ≈ 1) it moves kv ΔE of ε and
+/// no momentum; at fixed S a particle's rest-frame enthalpy changes by γ times the ε it
+/// receives (E² = (ε + P/N)² − S²), where a Lorentz-covariant heat flux q would carry the
+/// momentum γ v q along with its energy γ q. Measured on `models/verify/sr-advection1.toml`
+/// with F3: the Lorentz factors spread from 70.7 to [51.9, 115.9] by t = 0.1 and the run
+/// stops at t = 0.86 with |S| ≥ ε. With K = 0, or with this viscosity alone, they stay in
+/// [70.3, 71.8] at t = 1. A covariant conduction (moving γ̄ q of energy and γ̄ v̄ q of
+/// momentum) still spread them to [61.7, 99.4] by t = 1: the eigenvalue signal speed
+/// (Eq. 79) includes the bulk motion, ≈ 1 for pairs oblique to the flow, so any conduction
+/// with it runs up to γ times faster than the fluid's proper time allows.
+#[inline(always)]
+fn dissipation_jumps<const D: usize>(
+    conduction: bool,
+    (va_par, ra): (f64, &Rec<D>),
+    (vb_par, rb): (f64, &Rec<D>),
+) -> (f64, f64) {
+    let ((ea, pa), (eb, pb)) = if conduction {
+        ((ra.enthalpy, ra.p_over_n), (rb.enthalpy, rb.p_over_n))
+    } else {
+        let mean = (
+            0.5 * (ra.enthalpy + rb.enthalpy),
+            0.5 * (ra.p_over_n + rb.p_over_n),
+        );
+        (mean, mean)
+    };
+    let (sa, epsa) = projected(va_par, ea, pa);
+    let (sb, epsb) = projected(vb_par, eb, pb);
+    (sa - sb, epsa - epsb)
+}
+
 impl<const D: usize> Scheme<D> for RosswogSr {
     fn name(&self) -> &'static str {
         match self.preset {
@@ -298,6 +341,7 @@ impl<const D: usize> Scheme<D> for RosswogSr {
             .collect();
         let mut out = vec![Acc::<D>::default(); n];
         let k = &sys.kernel;
+        let conduction = self.params.conduction;
         sys.gather_with(
             |i| (recs[i].x, recs[i].v),
             &mut out,
@@ -325,14 +369,14 @@ impl<const D: usize> Scheme<D> for RosswogSr {
                     let dab = (ga + gb) * 0.5;
                     let kab = 0.5 * (ra.k + rb.k);
                     let kv = kab * vsig / (0.5 * (ra.big_n + rb.big_n));
-                    let (sa, ea) = projected(va_par, ra.enthalpy, ra.p_over_n);
-                    let (sb, eb) = projected(vb_par, rb.enthalpy, rb.p_over_n);
-                    let pi = -kv * (sa - sb);
+                    let (ds_star, deps_star) =
+                        dissipation_jumps(conduction, (va_par, ra), (vb_par, rb));
+                    let pi = -kv * ds_star;
                     o.ds_diss -= dab * (rb.nu * pi);
                     // −ν_b Ω_ab·D_ab with Ω_ab = −kv (ε*_a − ε*_b) ê (Eq. 71). Unlike the
                     // Newtonian loop, which splits the viscous heating pairwise, this is the
                     // paper's e-form: ε must be evolved for the recovery.
-                    o.deps_diss += rb.nu * kv * (ea - eb) * e.dot(&dab);
+                    o.deps_diss += rb.nu * kv * deps_star * e.dot(&dab);
                 }
             },
         );
