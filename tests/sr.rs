@@ -424,7 +424,7 @@ fn advection_one_lorentz_spread(conduction: bool) -> f64 {
 
 /// The paper's Chow–Monaghan dissipation conducts across a hot contact at γ = 70.7 without
 /// the momentum the heat carries, and the Lorentz factors run away; `scheme.conduction =
-/// false` (velocity jumps only) keeps them (see `dissipation_jumps` in src/scheme/rosswog/sr).
+/// false` (velocity jumps only) keeps them (see `pair_dissipation` in src/scheme/rosswog/sr).
 #[test]
 fn a_hot_contact_at_high_lorentz_factor_needs_the_viscous_only_dissipation() {
     let paper = advection_one_lorentz_spread(true);

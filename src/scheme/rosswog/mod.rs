@@ -84,7 +84,7 @@ pub struct RosswogParams {
     /// Keep the conduction part of the Chow–Monaghan dissipation (Rosswog (2015) Eqs. 70–75:
     /// the jumps in e* (Newtonian: u) and, in SR, in S* and ε* through the enthalpy);
     /// false dissipates only the velocity jump. Our option, for hot contacts moving at high
-    /// γ, where the paper's form is unstable (see `sr::dissipation_jumps`).
+    /// γ, where the paper's form is unstable (see `sr::pair_dissipation`).
     pub conduction: bool,
 }
 

@@ -208,47 +208,65 @@ fn projected(v_par: f64, enthalpy: f64, p_over_n: f64) -> (f64, f64) {
     (gs * enthalpy * v_par, gs * enthalpy - p_over_n)
 }
 
-/// The jumps (S*_a − S*_b)·ê and ε*_a − ε*_b that the dissipation of an approaching pair
-/// acts on (Rosswog (2015) Eqs. 70–75), from each particle's velocity along ê and record.
+/// Particle a's dS/dt and dε/dt per unit ν_b from the dissipation of the approaching pair
+/// (a, b) (Rosswog (2015) Eqs. 68–76), given kv = K̄ v_sig / N̄, each particle's velocity
+/// along ê, b's (image) velocity, ê and D_ab.
 ///
-/// With `conduction` (the default, the paper's form) each particle's own enthalpy E_k and
-/// P_k/N_k enter S*_k and ε*_k, so a pair moving at one velocity still exchanges energy and
-/// momentum in proportion to its enthalpy jump: a conduction. Without it the pair-mean Ē and
-/// P/N enter both, so only γ*_k and v_k·ê differ: a relativistic viscosity alone (Newtonian
-/// limit: Π ∝ the approach speed w, ε*-jump ½(v_a·ê)² − ½(v_b·ê)²; the Newtonian presets
-/// drop their kv (u_a − u_b) term to match).
+/// With `conduction` (the default) this is the paper's form: S*_k and ε*_k (Eqs. 73–75)
+/// carry each particle's own enthalpy E_k and P_k/N_k, Π = −kv (S*_a − S*_b)·ê and
+/// dε/dt = kv (ε*_a − ε*_b) ê·D. A pair moving at one velocity still exchanges energy and
+/// momentum in proportion to its enthalpy jump: a conduction.
+///
+/// Without it (`scheme.conduction = false`, our option): Π from the pair-mean Ē and P/N, so
+/// only γ*_k and v_k·ê differ (a relativistic viscosity: Π ∝ the approach speed in the
+/// Newtonian limit), and the energy it dissipates goes as the pair's work, dε/dt = −Π v̄·D
+/// with v̄ = ½(v_a + v_b): exactly the Newtonian presets' pairwise split of the viscous heating
+/// ([`super::dissipative_heating`]), which the Newtonian presets keep without their
+/// kv (u_a − u_b) term under the same key. Then a's rest-frame heating,
+/// γ_a(dε − v_a·dS) = ½ Π v_ab·D per ν_b, holds only relative velocities.
 ///
 /// Why the option (our decision; the paper has only the first form). Advection I (§7.5) with
-/// X = ν: a hot contact (E = 443 inside the triangle, 222 outside) moving at γ = 70.7. The
-/// X = ν pressure blip there sets particles moving, pairs across the contact approach, and
-/// the conduction acts. For a pair across the flow (v·ê ≈ 0, γ* ≈ 1) it moves kv ΔE of ε and
-/// no momentum; at fixed S a particle's rest-frame enthalpy changes by γ times the ε it
-/// receives (E² = (ε + P/N)² − S²), where a Lorentz-covariant heat flux q would carry the
-/// momentum γ v q along with its energy γ q. Measured on `models/verify/sr-advection1.toml`
-/// with F3: the Lorentz factors spread from 70.7 to [51.9, 115.9] by t = 0.1 and the run
-/// stops at t = 0.86 with |S| ≥ ε. With K = 0, or with this viscosity alone, they stay in
-/// [70.3, 71.8] at t = 1. A covariant conduction (moving γ̄ q of energy and γ̄ v̄ q of
-/// momentum) still spread them to [61.7, 99.4] by t = 1: the eigenvalue signal speed
-/// (Eq. 79) includes the bulk motion, ≈ 1 for pairs oblique to the flow, so any conduction
-/// with it runs up to γ times faster than the fluid's proper time allows.
+/// X = ν (F3, F4): a hot contact (E = 443 inside the triangle, 222 outside) moving at
+/// γ = 70.7, where X = ν's pressure blip sets pairs approaching. Measured on
+/// `models/verify/sr-advection1.toml` with F3 (7K particles):
+/// * the paper's form: across the flow (v·ê ≈ 0, γ* ≈ 1) the conduction moves kv ΔE of ε and
+///   no momentum, and at fixed S a particle's rest-frame enthalpy changes by γ times the ε it
+///   receives (E² = (ε + P/N)² − S²); a Lorentz-covariant heat flux q would carry the
+///   momentum γ v q with its energy γ q. The Lorentz factors spread from 70.7 to
+///   [51.9, 115.9] by t = 0.1 and the run stopped at t = 0.86 with |S| ≥ ε. With K = 0 they
+///   stay in [70.3, 71.8] at t = 1.
+/// * a covariant conduction (γ̄ q of energy, γ̄ v̄ q of momentum) still spread them to
+///   [61.7, 99.4] by t = 1: the eigenvalue signal speed (Eq. 79) holds the bulk motion, ≈ 1
+///   for pairs oblique to the flow, so a conduction with it runs up to γ times faster than
+///   the fluid's proper time allows.
+/// * the pair-mean jumps with the paper's ε*-form energy: clean to t = 1, but IA's D_ab has a
+///   part D⊥ across ê, and that energy form then heats a by −γ kv ΔS* (v_a·D⊥): the lab
+///   velocity, γ times over (the SR twin of the Newtonian presets' finding). The run stopped
+///   (time step below 1e-10) at t = 18.2 with the triggers, at t = 1.4 with K = 1; F4's
+///   kernel gradients (D ∥ ê) ran all ten crossings.
 #[inline(always)]
-fn dissipation_jumps<const D: usize>(
+fn pair_dissipation<const D: usize>(
     conduction: bool,
+    kv: f64,
     (va_par, ra): (f64, &Rec<D>),
-    (vb_par, rb): (f64, &Rec<D>),
-) -> (f64, f64) {
-    let ((ea, pa), (eb, pb)) = if conduction {
-        ((ra.enthalpy, ra.p_over_n), (rb.enthalpy, rb.p_over_n))
+    (vb_par, rb, vb): (f64, &Rec<D>, &Vector<D>),
+    e: &Vector<D>,
+    dab: &Vector<D>,
+) -> (Vector<D>, f64) {
+    if conduction {
+        let (sa, epsa) = projected(va_par, ra.enthalpy, ra.p_over_n);
+        let (sb, epsb) = projected(vb_par, rb.enthalpy, rb.p_over_n);
+        // −Π D and −Ω·D with Ω = −kv (ε*_a − ε*_b) ê (Eqs. 68–71)
+        (dab * (kv * (sa - sb)), kv * (epsa - epsb) * e.dot(dab))
     } else {
-        let mean = (
+        let (e_bar, pn_bar) = (
             0.5 * (ra.enthalpy + rb.enthalpy),
             0.5 * (ra.p_over_n + rb.p_over_n),
         );
-        (mean, mean)
-    };
-    let (sa, epsa) = projected(va_par, ea, pa);
-    let (sb, epsb) = projected(vb_par, eb, pb);
-    (sa - sb, epsa - epsb)
+        let pi = -kv * (projected(va_par, e_bar, pn_bar).0 - projected(vb_par, e_bar, pn_bar).0);
+        let v_bar = (ra.v + vb) * 0.5;
+        (dab * -pi, -pi * v_bar.dot(dab))
+    }
 }
 
 impl<const D: usize> Scheme<D> for RosswogSr {
@@ -369,14 +387,18 @@ impl<const D: usize> Scheme<D> for RosswogSr {
                     let dab = (ga + gb) * 0.5;
                     let kab = 0.5 * (ra.k + rb.k);
                     let kv = kab * vsig / (0.5 * (ra.big_n + rb.big_n));
-                    let (ds_star, deps_star) =
-                        dissipation_jumps(conduction, (va_par, ra), (vb_par, rb));
-                    let pi = -kv * ds_star;
-                    o.ds_diss -= dab * (rb.nu * pi);
-                    // −ν_b Ω_ab·D_ab with Ω_ab = −kv (ε*_a − ε*_b) ê (Eq. 71). Unlike the
-                    // Newtonian loop, which splits the viscous heating pairwise, this is the
-                    // paper's e-form: ε must be evolved for the recovery.
-                    o.deps_diss += rb.nu * kv * deps_star * e.dot(&dab);
+                    let (ds, deps) = pair_dissipation(
+                        conduction,
+                        kv,
+                        (va_par, ra),
+                        (vb_par, rb, &pr.vb),
+                        &e,
+                        &dab,
+                    );
+                    // the paper's e-form (ε must be evolved for the recovery), or the pair's
+                    // work without conduction ([`pair_dissipation`])
+                    o.ds_diss += ds * rb.nu;
+                    o.deps_diss += deps * rb.nu;
                 }
             },
         );
