@@ -217,7 +217,7 @@ fn projected(v_par: f64, enthalpy: f64, p_over_n: f64) -> (f64, f64) {
 /// dε/dt = kv (ε*_a − ε*_b) ê·D. A pair moving at one velocity still exchanges energy and
 /// momentum in proportion to its enthalpy jump: a conduction.
 ///
-/// Without it (`scheme.conduction = false`, our option): Π from the pair-mean Ē and P/N, so
+/// Without it (`scheme.conduction = false`, our option): Π from the pair-mean Ē, so
 /// only γ*_k and v_k·ê differ (a relativistic viscosity: Π ∝ the approach speed in the
 /// Newtonian limit), and the energy it dissipates goes as the pair's work, dε/dt = −Π v̄·D
 /// with v̄ = ½(v_a + v_b): exactly the Newtonian presets' pairwise split of the viscous heating
@@ -259,11 +259,9 @@ fn pair_dissipation<const D: usize>(
         // −Π D and −Ω·D with Ω = −kv (ε*_a − ε*_b) ê (Eqs. 68–71)
         (dab * (kv * (sa - sb)), kv * (epsa - epsb) * e.dot(dab))
     } else {
-        let (e_bar, pn_bar) = (
-            0.5 * (ra.enthalpy + rb.enthalpy),
-            0.5 * (ra.p_over_n + rb.p_over_n),
-        );
-        let pi = -kv * (projected(va_par, e_bar, pn_bar).0 - projected(vb_par, e_bar, pn_bar).0);
+        // S*·ê at the pair-mean enthalpy (P/N enters only ε*, which this form does not use)
+        let e_bar = 0.5 * (ra.enthalpy + rb.enthalpy);
+        let pi = -kv * (projected(va_par, e_bar, 0.0).0 - projected(vb_par, e_bar, 0.0).0);
         let v_bar = (ra.v + vb) * 0.5;
         (dab * -pi, -pi * v_bar.dot(dab))
     }
