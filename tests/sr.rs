@@ -434,3 +434,20 @@ fn a_hot_contact_at_high_lorentz_factor_needs_the_viscous_only_dissipation() {
     assert!(paper > 0.2, "{paper}");
     assert!(viscous < 1e-3, "{viscous}");
 }
+
+/// Where the paper's form fails (F4 on Advection I stops in its first step, because its
+/// stages create approaching pairs that then conduct), the error names the particle and the
+/// option that runs the case on.
+#[test]
+fn a_failed_recovery_under_conduction_names_the_option() {
+    let text = model_text("verify/sr-advection1.toml")
+        .replace("name = \"rosswog-sr-f1\"", "name = \"rosswog-sr-f4\"")
+        .replace("spacing = 0.0257", "spacing = 0.05");
+    let mut sim = Case::parse(&text).unwrap().build::<2>().unwrap();
+    let err = sim.advance_to(0.1, |_| {}).unwrap_err().to_string();
+    assert!(
+        err.contains("primitive recovery failed on particle"),
+        "{err}"
+    );
+    assert!(err.contains("scheme.conduction = false"), "{err}");
+}

@@ -87,6 +87,19 @@ impl RosswogSr {
     }
 }
 
+/// A failed recovery under the paper's conduction names the option that runs the measured
+/// cases on ([`pair_dissipation`]): the user sees the way out where the run stops.
+fn with_conduction_hint(e: SchemeError, conduction: bool) -> SchemeError {
+    if conduction && e.0.starts_with("primitive recovery failed") {
+        SchemeError(format!(
+            "{}; if the run has a hot contact or shear at high Lorentz factor, try scheme.conduction = false (the paper's dissipation conducts heat without its momentum there)",
+            e.0
+        ))
+    } else {
+        e
+    }
+}
+
 /// v, u, P, c_s and γ of every particle from its S, ε and the summed N (Rosswog (2015)
 /// Sec. 6.4), with the iteration counts in the run statistics. A state with no velocity
 /// below c stops the run with the particle named, never a NaN.
@@ -325,9 +338,11 @@ impl<const D: usize> Scheme<D> for RosswogSr {
             return Err(SchemeError(e.clone()));
         }
         let (slots, g) = (self.slots, self.gamma_eos);
+        let conduction = self.params.conduction;
         let xw = density_and_pressure(sys, &self.params, self.trig.first_step, &mut |s| {
             recover_all(s, slots, g)
-        })?;
+        })
+        .map_err(|e| with_conduction_hint(e, conduction))?;
         let mats = ia_matrices(sys);
         let t0 = std::time::Instant::now();
         let n = sys.particles.len();
@@ -357,7 +372,6 @@ impl<const D: usize> Scheme<D> for RosswogSr {
             .collect();
         let mut out = vec![Acc::<D>::default(); n];
         let k = &sys.kernel;
-        let conduction = self.params.conduction;
         sys.gather_with(
             |i| (recs[i].x, recs[i].v),
             &mut out,
