@@ -29,6 +29,9 @@ struct HSolve {
     capped: bool,
     /// The sums of [`solve_density_and_h_with_sums`] at the final h.
     sums: [f64; 4],
+    /// The h the kernel lanes were last taken at: h itself, or h before the final Newton
+    /// step, which is taken to first order ([`solve_one`]).
+    h_eval: f64,
 }
 
 /// Make the neighbour lists valid, solve h and ρ for every particle (X = m), compute Ω, then
@@ -213,7 +216,10 @@ impl<const D: usize, K: Kernel + Copy> RowPass for SolveRows<'_, D, K> {
         };
         *out = solve_one(v.sys, xa, a, v.start_h[a], v.h_allowed[a], kappa);
         if let Some(y) = v.extra {
-            out.sums = lanes.extra_sums(self.kernel, y[a], out.h);
+            // the lanes hold the kernel at h_eval; carried to h to first order, as κ is
+            let s = lanes.extra_sums(self.kernel, y[a], out.h_eval);
+            let step = out.h - out.h_eval;
+            out.sums = [s[0] + s[2] * step, s[1] + s[3] * step, s[2], s[3]];
         }
     }
 }
@@ -430,6 +436,7 @@ fn solve_one<const D: usize, K: Kernel + Copy>(
             needs_rebuild,
             capped,
             sums: [0.0; 4],
+            h_eval: h,
         };
     if sys.particles.body[a] != 0 || sys.particles.port[a] != 0 || h0_beyond_list {
         let (kappa, dkappa) = kappa_of.at(h);
@@ -440,8 +447,27 @@ fn solve_one<const D: usize, K: Kernel + Copy>(
         let (kappa, dkappa) = kappa_of.at(h);
         let kappa_h = xa * eta_d / h.powi(D as i32);
         let f = kappa - kappa_h;
-        // Converged: the summation density and the h-implied density agree.
-        if (f / kappa).abs() < DENSITY_TOLERANCE || it >= MAX_NEWTON {
+        let df = dkappa + D as f64 * kappa_h / h;
+        // Converged: the summation density and the h-implied density agree to the tolerance.
+        // h still takes the Newton step, with κ carried along to first order (no new kernel
+        // sum): Rosswog (2015) Sec. 6.1.3 sets h = η V^{1/D} from every new density before it
+        // tests convergence, and warns that a careless h update is a source of noise. Were h
+        // kept wherever the test passes, h would be a variable of its own, moved only by
+        // `System::predict_h` (stale ∇·v, first order) and tied to the positions within
+        // 1e-4: on a lattice at rest that lets round-off grow ×8 per sound crossing at CFL
+        // 0.5 (2D noise box, periodic, F1 and F3 alike), and with the step h is the
+        // positions' own again, 1.1 per crossing, which is round-off's random walk
+        // (measured; tests/noise.rs).
+        if (f / kappa).abs() < DENSITY_TOLERANCE {
+            if df > 0.0 {
+                let h1 = (h - f / df).min(h_cap);
+                let mut r = finish(h1, kappa + dkappa * (h1 - h), dkappa, it, false, false);
+                r.h_eval = h;
+                return r;
+            }
+            return finish(h, kappa, dkappa, it, false, false);
+        }
+        if it >= MAX_NEWTON {
             return finish(h, kappa, dkappa, it, false, false);
         }
         // f is increasing in h where the solution is unique (κ_h falls as h^-D); bracket it.
@@ -450,7 +476,6 @@ fn solve_one<const D: usize, K: Kernel + Copy>(
         } else {
             hi = hi.min(h);
         }
-        let df = dkappa + D as f64 * kappa_h / h;
         let mut h_new = if df > 0.0 { h - f / df } else { f64::NAN };
         if !(h_new.is_finite() && h_new > lo && h_new < hi) || h_new > 1.5 * h || h_new < 0.6 * h {
             // Newton left the bracket or stepped too far: bisect (geometric when unbounded).
