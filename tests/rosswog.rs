@@ -194,8 +194,11 @@ fn gresho_f1_converges_f4_does_not() {
         f4[1],
         order(f4)
     );
-    // measured: F1 8.34e-2 -> 4.80e-2 (order 0.80); F4 1.88e-1 -> 1.41e-1 (order 0.41)
-    assert!(order(f1) >= 0.78, "F1 order {}", order(f1));
+    // measured: F1 8.63e-2 -> 5.26e-2 (order 0.72); F4 1.89e-1 -> 1.41e-1 (order 0.42). F1
+    // had 8.34e-2 -> 4.80e-2 (0.80) while the h solve kept a converged h: the noise that let
+    // grow fed the noise trigger, whose dissipation lowered L1 (without the trigger, n_noise =
+    // 1e6, both give 5.31e-2 at 64; `sphfmu run models/gresho-f1.toml`).
+    assert!(order(f1) >= 0.65, "F1 order {}", order(f1));
     assert!(order(f4) <= 0.55, "F4 order {}", order(f4));
     assert!(
         f1[1] < 0.5 * f4[1],
