@@ -457,7 +457,7 @@ fn solve_one<const D: usize, K: Kernel + Copy>(
         // 1e-4: on a lattice at rest that lets round-off grow ×8 per sound crossing at CFL
         // 0.5 (2D noise box, periodic, F1 and F3 alike), and with the step h is the
         // positions' own again, 1.1 per crossing, which is round-off's random walk
-        // (measured; tests/noise.rs).
+        // (measured; tests/rosswog_static.rs).
         if (f / kappa).abs() < DENSITY_TOLERANCE {
             if df > 0.0 {
                 let h1 = (h - f / df).min(h_cap);

@@ -87,26 +87,16 @@ impl RosswogSr {
     }
 }
 
-/// A failed recovery under the paper's conduction names the option that runs the measured
-/// cases on ([`pair_dissipation`]): the user sees the way out where the run stops.
-fn with_conduction_hint(e: SchemeError, conduction: bool) -> SchemeError {
-    if conduction && e.0.starts_with("primitive recovery failed") {
-        SchemeError(format!(
-            "{}; if the run has a hot contact or shear at high Lorentz factor, try scheme.conduction = false (the paper's dissipation conducts heat without its momentum there)",
-            e.0
-        ))
-    } else {
-        e
-    }
-}
-
 /// v, u, P, c_s and γ of every particle from its S, ε and the summed N (Rosswog (2015)
 /// Sec. 6.4), with the iteration counts in the run statistics. A state with no velocity
-/// below c stops the run with the particle named, never a NaN.
+/// below c stops the run with the particle named, never a NaN; under the paper's conduction
+/// (`conduction`) the message also names the option that runs the measured cases on
+/// ([`pair_dissipation`]), so the user sees the way out where the run stops.
 pub fn recover_all<const D: usize>(
     sys: &mut System<D>,
     slots: SrSlots,
     gamma_eos: f64,
+    conduction: bool,
 ) -> Result<(), SchemeError> {
     let p = &sys.particles;
     let s = &p.extra_vectors[slots.momentum];
@@ -122,8 +112,13 @@ pub fn recover_all<const D: usize>(
                 Some(p.pressure[i]),
             )
             .map_err(|e| {
+                let hint = if conduction {
+                    "; if the run has a hot contact or shear at high Lorentz factor, try scheme.conduction = false (the paper's dissipation conducts heat without its momentum there)"
+                } else {
+                    ""
+                };
                 format!(
-                    "primitive recovery failed on particle {} at x = {:?}: {}",
+                    "primitive recovery failed on particle {} at x = {:?}: {}{hint}",
                     p.id[i],
                     p.pos[i].as_slice(),
                     e.0
@@ -340,9 +335,8 @@ impl<const D: usize> Scheme<D> for RosswogSr {
         let (slots, g) = (self.slots, self.gamma_eos);
         let conduction = self.params.conduction;
         let xw = density_and_pressure(sys, &self.params, self.trig.first_step, &mut |s| {
-            recover_all(s, slots, g)
-        })
-        .map_err(|e| with_conduction_hint(e, conduction))?;
+            recover_all(s, slots, g, conduction)
+        })?;
         let mats = ia_matrices(sys);
         let t0 = std::time::Instant::now();
         let n = sys.particles.len();
@@ -422,10 +416,10 @@ impl<const D: usize> Scheme<D> for RosswogSr {
     }
 
     fn refresh(&mut self, sys: &mut System<D>) {
-        let (slots, g) = (self.slots, self.gamma_eos);
+        let (slots, g, conduction) = (self.slots, self.gamma_eos, self.params.conduction);
         // a refresh has no way to report; the next evaluation recovers again and reports
         let _ = density_and_pressure(sys, &self.params, self.trig.first_step, &mut |s| {
-            recover_all(s, slots, g)
+            recover_all(s, slots, g, conduction)
         });
     }
 
