@@ -86,3 +86,20 @@ def test_every_measured_entry_names_a_valid_case():
             assert r.returncode == 0, f"{c['id']}: {' '.join(cmd)}: {r.stderr}"
             checked += 1
     assert checked > 20
+
+
+def test_report_only_repeats_the_header_of_the_run_that_last_measured(tmp_path):
+    """A partial run (--only) names its claims in the report's header, and --report-only, which
+    rewrites the report from rows.json, keeps that header instead of the last full run's."""
+    out = tmp_path / "docs"
+    out.mkdir()
+    (out / "rows.json").write_text("[]\n")
+    (out / "meta.json").write_text('{"seconds": 3504, "last": {"seconds": 742, "only": "rosswog-5"}}\n')
+    argv = sys.argv
+    sys.argv = ["verify.py", "--report-only", "--out", str(out)]
+    try:
+        assert verify.main() == 0
+    finally:
+        sys.argv = argv
+    text = (out / "README.md").read_text()
+    assert "Wall time of this run: 12.4 min (re-measured: rosswog-5;" in text, text[:600]
