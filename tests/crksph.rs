@@ -204,13 +204,16 @@ fn square_survives(n: usize, t_end: f64) {
         sim.steps,
         moved * n as f64
     );
-    // measured at 100² (make verify): spread 3.3e-13, ratio error 8.1e-13, displacement 8e-13
-    // spacings; at 48² (default tier): 7.3e-14, 1.9e-13, 2.2e-13. Displacement: 3e-12 spacings
+    // measured at 100² (make verify): spread 1.3e-12, ratio error 2.8e-12, displacement 5.8e-12
+    // spacings. Before the h solve took its Newton step on a converged h (a converged h then
+    // stayed bit for bit; the step adds a round-off move of h at every stage): 3.3e-13,
+    // 8.1e-13 and 8e-13. Round-off over 3,430 steps either way; the bounds keep a factor of
+    // about 3. The default tier's 48² passes them too.
     assert!(
-        s1 < 1e-12 && r1 < 1e-12,
+        s1 < 5e-12 && r1 < 1e-11,
         "density spread {s1:e}, ratio {r1:e}"
     );
-    assert!(moved < 3e-12 / n as f64, "a particle moved {moved:e}");
+    assert!(moved < 2e-11 / n as f64, "a particle moved {moved:e}");
 }
 
 /// L1 of the density perturbation of the 1D acoustic wave (Frontiere, Raskin & Owen (2017) §4.1) after `periods` periods
