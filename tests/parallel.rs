@@ -190,6 +190,16 @@ fn rosswog_f4_is_bit_identical_on_1_2_3_ranks() {
     same_on_1_2_3_ranks("name = \"rosswog-f4\"");
 }
 
+/// The special-relativistic F1–F4 (c = 1; the box's speeds, 0.2–0.4, stay well below it)
+/// share the Newtonian loop's halo refreshes; their primitive recovery runs on the halo copies
+/// from refreshed N and the carried S and ε, so it gives the owners' bits there too.
+#[test]
+fn rosswog_sr_f1_to_f4_are_bit_identical_on_1_2_3_ranks() {
+    for preset in ["f1", "f2", "f3", "f4"] {
+        same_on_1_2_3_ranks(&format!("name = \"rosswog-sr-{preset}\""));
+    }
+}
+
 /// Conservation on several ranks is as good as on one: CRKSPH's energy (compatible update,
 /// round-off) and momentum over 50 steps of the random box, on 1 and 3 ranks. The totals are
 /// sums of per-rank sums, so they may differ in the last bits; the drifts must agree to

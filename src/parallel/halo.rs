@@ -2,12 +2,13 @@
 //! owners before every evaluation by [`HaloScheme`], which wraps the run's scheme.
 //!
 //! Two ways to keep the halo exact, chosen by the scheme ([`crate::scheme::Scheme::halo_depth`]):
-//! - **Per-pass refreshes** (issue 23's design; every Newtonian scheme): one exchange of
+//! - **Per-pass refreshes** (issue 23's design; every scheme of ours): one exchange of
 //!   whole particles per evaluation, then, between passes, the owners' values of only the
 //!   fields the next pass reads of its neighbours (`refresh`). Every
 //!   halo copy then holds its owner's bits at any depth, so one support (plus the skin) is
 //!   deep enough for the scheme, and the halo's own redundant work is one support's worth.
-//! - **A deep halo** (the special-relativistic schemes): one exchange per evaluation, the halo as deep as
+//! - **A deep halo** (the trait's default, for a scheme that does not refresh): one exchange
+//!   per evaluation, the halo as deep as
 //!   the scheme's chain of dependent passes. Each rank runs every pass on its halo too; the
 //!   outer layers come out wrong (their neighbourhoods are cut), but a pass only reads
 //!   neighbours one support away, so the error moves inwards one support per pass and never

@@ -562,11 +562,6 @@ impl<const D: usize> Scheme<D> for Rosswog {
     }
 
     fn end_step(&mut self, sys: &mut System<D>, dt: f64) {
-        if self.params.triggers {
-            // the noise triggers read the neighbours' ∇·v (Eqs. 87–88)
-            let (sync, p) = (sys.halo_sync(), &mut sys.particles);
-            sync.refresh(vec![crate::parallel::rows(&mut p.div_v)]);
-        }
         self.trig.end_step(sys, &self.params, dt, None);
     }
 

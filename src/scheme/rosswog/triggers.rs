@@ -44,6 +44,10 @@ impl TriggerState {
         lorentz: Option<&[f64]>,
     ) {
         if prm.triggers {
+            // the noise triggers read the neighbours' ∇·v (Eqs. 87–88); their γ_b (SR) come
+            // from the recovery, which ran on the halo copies from their owners' bits
+            let (sync, p) = (sys.halo_sync(), &mut sys.particles);
+            sync.refresh(vec![crate::parallel::rows(&mut p.div_v)]);
             self.levels = Some(update(
                 sys,
                 prm,

@@ -450,6 +450,14 @@ impl<const D: usize> Scheme<D> for RosswogSr {
         self.trig.end_step(sys, &self.params, dt, Some(&lorentz));
     }
 
+    /// One support, as the Newtonian F1–F4: the h–ρ–P loop, the IA matrices and the
+    /// triggers refresh the halo between passes, and the primitive recovery runs on the
+    /// halo copies from their refreshed N and carried S, ε (with the owners' P as its
+    /// first guess), so it gives their owners' bits.
+    fn halo_depth(&self) -> usize {
+        1
+    }
+
     fn trigger_levels(&self) -> Option<TriggerLevels> {
         self.trig.levels
     }
