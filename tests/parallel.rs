@@ -190,7 +190,7 @@ fn rosswog_f4_is_bit_identical_on_1_2_3_ranks() {
     same_on_1_2_3_ranks("name = \"rosswog-f4\"");
 }
 
-/// The special-relativistic F1–F4 (c = 1; the box's speeds, 0.2–0.4, stay well below it)
+/// The special-relativistic F1–F4 (c = 1; the box's speeds, 0.36 and 0.41, stay well below it)
 /// share the Newtonian loop's halo refreshes; their primitive recovery runs on the halo copies
 /// from refreshed N and the carried S and ε, so it gives the owners' bits there too.
 #[test]
