@@ -9,10 +9,9 @@
 //!   deep enough for the scheme, and the halo's own redundant work is one support's worth.
 //! - **A deep halo** (the trait's default, for a scheme that does not refresh): one exchange
 //!   per evaluation, the halo as deep as the scheme's chain of dependent passes. Each rank
-//!   runs every pass on its halo too; the
-//!   outer layers come out wrong (their neighbourhoods are cut), but a pass only reads
-//!   neighbours one support away, so the error moves inwards one support per pass and never
-//!   reaches an owned particle. The scheme needs no refresh calls, at the price of more
+//!   runs every pass on its halo too; the outer layers come out wrong (their neighbourhoods
+//!   are cut), but a pass only reads neighbours one support away, so the error moves inwards
+//!   one support per pass and never reaches an owned particle. The scheme needs no refresh calls, at the price of more
 //!   halo work, which `make bench` measures (the `MPI:` row).
 
 use super::comm::{Comm, CommError};
