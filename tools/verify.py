@@ -73,10 +73,14 @@ class Run:
             cmd += ["--set", 'output.formats=["csv", "vtu"]']
         return cmd
 
+    def is_kernel_table(self) -> bool:
+        """A `sphfmu kernels ...` table (the model string is the command's arguments), not a run."""
+        return self.model.split()[0] == "kernels"
+
     def shown(self) -> str:
         """The command as a user would type it (relative paths, no --out)."""
-        if self.model == "kernels":
-            return "sphfmu kernels"
+        if self.is_kernel_table():
+            return f"sphfmu {self.model}"
         parts = ["sphfmu run", self.model]
         if self.scheme != "case":
             parts += ["--scheme", self.scheme]
@@ -367,7 +371,7 @@ def main() -> int:
                 runs.setdefault(run.dir, run)
     cores = os.cpu_count() or 1
     threads = max(1, cores // a.jobs)
-    todo = [r for r in runs.values() if r.model != "kernels"]
+    todo = [r for r in runs.values() if not r.is_kernel_table()]
     print(f"verify: {len(claims)} claims, {len(todo)} runs, {a.jobs} at once with {threads} threads each")
     done = 0
     with cf.ThreadPoolExecutor(max_workers=a.jobs) as pool:
@@ -377,12 +381,13 @@ def main() -> int:
             done += 1
             status = r.error or f"{r.summary.get('steps', '?')} steps"
             print(f"  [{done}/{len(todo)}] {r.shown()}: {r.seconds:.1f} s, {status}", flush=True)
-    kernel_runs = [r for r in runs.values() if r.model == "kernels"]
-    if kernel_runs:
-        t0 = time.time()
-        text = subprocess.run([str(BIN), "kernels"], capture_output=True, text=True, check=True).stdout
-        for r in kernel_runs:
-            r.kernel_table, r.seconds = parse_kernel_table(text), time.time() - t0
+    tables: dict[str, tuple[dict, float]] = {}
+    for r in (r for r in runs.values() if r.is_kernel_table()):
+        if r.model not in tables:
+            t0 = time.time()
+            text = subprocess.run([str(BIN), *r.model.split()], capture_output=True, text=True, check=True).stdout
+            tables[r.model] = parse_kernel_table(text), time.time() - t0
+        r.kernel_table, r.seconds = tables[r.model]
 
     rows = []
     for c in claims:
@@ -407,10 +412,12 @@ def main() -> int:
         else:
             figures: dict[str, dict[str, float | str]] = {}
             seconds: dict[str, dict[str, float]] = {}
-            cost = 0.0
+            cost, costed = 0.0, set()
             for scheme, label, run, args in plan[c["id"]]:
                 run = runs[run.dir]
-                cost += run.seconds
+                if run.dir not in costed:  # a run (or table) that several labels read costs once
+                    costed.add(run.dir)
+                    cost += run.seconds
                 m = c["run"]["metric"]
                 if run.error and not getattr(METRICS.get(m), "on_failure", False):
                     val: float | str = run.error

@@ -162,6 +162,19 @@ def kernel_gradient_error(run, args) -> float:
     return run.kernel_table[args["kernel"]]["∇x error"]
 
 
+@metric
+def kernel_density_error_curve(run, args) -> float:
+    """The geometric mean of ε_ρ of kernel ``kernel`` over the η of `sphfmu kernels --eta-scan`
+    from ``eta_from`` to ``eta_to``. A ratio of two such means is the mean vertical distance
+    between two curves of Rosswog (2015) Fig. 4 on its log axis; a mean, not one η, since the
+    curves dip to zero where the error changes sign."""
+    lo, hi = args["eta_from"] - 1e-9, args["eta_to"] + 1e-9
+    errs = [row[args["kernel"]] for eta, row in run.kernel_table.items() if lo <= float(eta) <= hi]
+    if not errs:
+        raise ValueError(f"no η in [{args['eta_from']}, {args['eta_to']}] in the scan")
+    return math.exp(sum(math.log(e) for e in errs) / len(errs))
+
+
 def parse_kernel_table(text: str) -> dict[str, dict[str, float]]:
     lines = [l for l in text.splitlines() if l.startswith("|")]
     head = [c.strip() for c in lines[0].strip("|").split("|")]

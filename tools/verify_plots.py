@@ -351,3 +351,26 @@ def blast_bubble(claim: dict, runs: list, png: Path) -> None:
     for k in range(len(best), rows):
         axes[2 * k + 1].set_visible(False)
     finish(plt, fig, claim, png, "relativistic blast–bubble: density N (computing frame)")
+
+
+@plot
+def kernel_density_curves(claim: dict, runs: list, png: Path) -> None:
+    """ε_ρ against η for each kernel of the claim (Rosswog (2015) Fig. 4) from its
+    `sphfmu kernels --eta-scan` table, with the η range each judged mean covers shaded."""
+    plt, fig, (ax,) = figure(1)
+    table = runs[0][2].kernel_table
+    etas = np.array([float(e) for e in table])
+    drawn = set()
+    for scheme, _, run, args in runs:
+        k = args["kernel"]
+        if k in drawn:
+            continue
+        drawn.add(k)
+        ax.semilogy(etas, [table[e][k] for e in table], lw=1, label=k)
+    for scheme, _, _, args in runs:
+        if args["eta_from"] == args["eta_to"]:
+            ax.axvline(args["eta_from"], color="0.5", ls=":", lw=0.8)
+    ax.set_xlabel("η = h / V^(1/2) (support 2h)")
+    ax.set_ylabel("ε_ρ = ⟨|Σ V_b W_ab − 1|⟩ (hexagonal lattice)")
+    ax.legend(fontsize=6, ncol=2)
+    finish(plt, fig, claim, png, "density error against η (Fig. 4 of the paper)")

@@ -107,7 +107,12 @@ enum Command {
     },
     /// Kernel table: normalisations, η, neighbours, and the lattice quality indicators Q1–Q4
     /// and the standard-gradient error on a periodic 2D hexagonal lattice (Rosswog §2, §3.6).
-    Kernels,
+    Kernels {
+        /// Instead, the density error Q1 = ε_ρ of every kernel against η, from FROM to TO in
+        /// steps of STEP (Rosswog (2015) Fig. 4), e.g. 1.0:3.0:0.02
+        #[arg(long, value_name = "FROM:TO:STEP")]
+        eta_scan: Option<String>,
+    },
     /// Measure particle-updates/s and pair-interactions/s on periodic boxes.
     Bench {
         /// Particle counts
@@ -277,7 +282,16 @@ fn main() -> ExitCode {
     };
     match cli.command {
         Command::Serve { args } => serve(&args),
-        Command::Kernels => {
+        Command::Kernels {
+            eta_scan: Some(spec),
+        } => match sphfmu::verify::lattice::eta_grid(&spec) {
+            Ok(etas) => {
+                print!("{}", sphfmu::verify::lattice::eta_scan_table(&etas));
+                ExitCode::SUCCESS
+            }
+            Err(e) => fail(2, e),
+        },
+        Command::Kernels { eta_scan: None } => {
             use sphfmu::kernel::{neighbours_for_eta, AnyKernel, Kernel};
             println!("| kernel | σ 1D | σ 2D | σ 3D | η | neighbours 2D | 3D | Q1 = ε_ρ | Q2/r_s | Q3·r_s | Q4 | ∇x error |");
             println!("|---|---|---|---|---|---|---|---|---|---|---|---|");

@@ -142,6 +142,32 @@ def test_every_binary_has_help_that_exits_0(sphfmu_bin, binary, args):
     assert "Usage:" in r.stdout, r.stdout
 
 
+@pytest.mark.parametrize("spec, field", [
+    ("1.0:2.0", "FROM:TO:STEP"), ("2.0:1.0:0.1", "FROM"), ("1.0:5.0:0.1", "TO"),
+    ("1.0:2.0:0", "STEP"), ("1.0:2.0:1e-6", "at most 1000"), ("a:2.0:0.1", "FROM"),
+])
+def test_kernels_eta_scan_refuses_a_bad_range_with_one_line(sphfmu_bin, spec, field):
+    r = run([sphfmu_bin, "kernels", "--eta-scan", spec], cwd=ROOT)
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("sphfmu: --eta-scan:") and field in lines[0], r.stderr
+
+
+def test_kernels_eta_scan_agrees_with_the_kernel_table_at_the_default_eta(sphfmu_bin):
+    """The scan's ε_ρ at η = 1.2 and 2.2 is the plain table's Q1 for M4 and W_H,9 at their
+    default η (one lattice, one sum), and the scan has every η asked for, ends included."""
+    table = run([sphfmu_bin, "kernels"], cwd=ROOT).stdout
+    q1 = {l.split("|")[1].strip(): l.split("|")[8].strip() for l in table.splitlines()[2:]}
+    scan = run([sphfmu_bin, "kernels", "--eta-scan", "1.2:2.2:0.5"], cwd=ROOT)
+    assert scan.returncode == 0, scan.stderr
+    lines = scan.stdout.splitlines()
+    head = [c.strip() for c in lines[0].strip("|").split("|")]
+    rows = {l.split("|")[1].strip(): [c.strip() for c in l.strip("|").split("|")] for l in lines[2:]}
+    assert list(rows) == ["1.2000", "1.7000", "2.2000"]
+    for eta, kernel in (("1.2000", "M4 cubic spline"), ("2.2000", "W_H,9 sinc")):
+        assert float(rows[eta][head.index(kernel)]) == pytest.approx(float(q1[kernel]), rel=5e-3)
+
+
 def test_package_refuses_a_missing_case_with_one_line(sphfmu_bin, tmp_path):
     exe = pathlib.Path(sphfmu_bin).with_name("sphfmu-package")
     r = run([str(exe), "--case", str(tmp_path / "none.toml"), "--out", str(tmp_path)], cwd=ROOT)
