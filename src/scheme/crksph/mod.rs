@@ -12,7 +12,9 @@
 //!   hardly depends on h) and the end-of-step state takes h¹ = h_ideal (Frontiere, Raskin & Owen (2017) §4 step 4).
 //!   Like IdealH it depends on the point distribution only, not on masses, so an equally
 //!   spaced multi-material lattice keeps one h (Frontiere, Raskin & Owen (2017) §4.2; App B).
-//! * ρ: eq 76 at every evaluation (midpoint and end of step); no continuity equation (eq 79).
+//! * ρ: eq 76 at every evaluation (midpoint and end of step) by default. `density =
+//!   "continuity"` evolves it by eq 79 from the case's initial ρ instead (App B's choice, and
+//!   Spheral's IntegrateDensity); eq 76 is then not used.
 //! * Integrator (item 7): `crk-rk2`, Spheral's CheapSynchronousRK2 (Frontiere, Raskin & Owen (2017) §4), CFL 0.25.
 //! * Time step (§7.2): the scheme writes v_sig = η·max(c, √(Q_max/ρ), approach speed) and
 //!   h|∇·v|, so the driver's C·h/v_sig is C·l/max(...) with the nodal spacing l = h/η.
@@ -29,7 +31,7 @@ pub mod viscosity;
 
 use super::compatible::PairWork;
 use super::paper_step;
-use super::standard::{check_above, check_range, curl_norm};
+use super::standard::{check_above, check_range, curl_norm, DensityMode};
 use super::{smoothing, Scheme, SchemeError};
 use crate::parallel::rows;
 use crate::system::System;
@@ -71,6 +73,10 @@ pub struct CrksphParams {
     /// E_i = m_i(u_i + ½v_i²) by eq 80 and recover u from it, the alternative the paper
     /// compares in the Kidder test (§4.0.1); otherwise u follows du/dt (eq 78).
     pub total_energy: bool,
+    /// ρ by eq 76 at every evaluation (summation, the paper's), or evolved by the continuity
+    /// equation, eq 79, with ∇·v from eq 54 (continuity: Spheral's IntegrateDensity, which
+    /// the paper's App B box uses throughout).
+    pub density: DensityMode,
 }
 
 impl Default for CrksphParams {
@@ -84,6 +90,7 @@ impl Default for CrksphParams {
             order: OrderName::Linear,
             compatible_energy: true,
             total_energy: false,
+            density: DensityMode::Summation,
         }
     }
 }
@@ -158,7 +165,13 @@ impl<const D: usize> Crksph<D> {
         let sync = sys.halo_sync();
         if solve_h {
             self.ones.resize(n, 1.0);
+            // the solve writes its own ρ; an evolved ρ starts from the case's
+            let evolved =
+                (self.params.density == DensityMode::Continuity).then(|| sys.particles.rho.clone());
             smoothing::solve_density_and_h_weighted(sys, Some(&self.ones), true);
+            if let Some(rho) = evolved {
+                sys.particles.rho = rho;
+            }
             smoothing::refresh_halo_after_solve(sys, true);
         } else {
             // (h from h_next, which the halo computes from refreshed V and h as its owners do)
@@ -184,7 +197,9 @@ impl<const D: usize> Crksph<D> {
         let state = coefficients_and_density(sys, &vol, &kern, self.order);
         sys.stats.ia_fallbacks = state.fallbacks;
         sys.stats.ia_fallbacks_total += state.fallbacks;
-        sys.particles.rho = state.rho;
+        if self.params.density == DensityMode::Summation {
+            sys.particles.rho = state.rho;
+        }
         let mut coef = state.coef;
         // the gradients and forces read the neighbours' corrections and ρ (P and c follow)
         sync.refresh(vec![rows(&mut coef), rows(&mut sys.particles.rho)]);
@@ -204,6 +219,7 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
         // wall particles need full neighbourhoods for their volumes (eq 75) and reproducing
         // coefficients; the force pass skips wall–wall pairs
         sys.wall_pairs = true;
+        sys.evolve_density = self.params.density == DensityMode::Continuity;
         self.visc = self
             .params
             .viscosity(sys.kernel.kernel.native_support(), sys.eta);
@@ -224,6 +240,9 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
             for (i, g) in grads.iter().enumerate() {
                 p.div_v[i] = g.trace();
                 p.curl_v[i] = curl_norm(g);
+                // eq 79, Dρ_i/Dt = −ρ_i ∂α v_i^α (read by the integrator only with
+                // density = "continuity")
+                p.drhodt[i] = -p.rho[i] * p.div_v[i];
             }
         }
         sys.stats.total_pairs += sys.neighbours.total_pairs() as u64;
