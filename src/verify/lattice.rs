@@ -100,8 +100,7 @@ pub fn hex_quality(kernel: AnyKernel, eta: f64) -> LatticeQuality {
 
 /// The η grid of an `--eta-scan FROM:TO:STEP` argument, checked: 0 < FROM ≤ TO ≤ 4 and
 /// 0 < STEP, at most 1000 points. At η = 4 the support 2h is 0.15, within half the 0.8-wide
-/// periodic test lattice, so the nearest-image sums of [`hex_quality`] see each neighbour once;
-/// the papers' curves end at η ≈ 3.
+/// periodic test lattice, so the nearest-image sums of [`hex_quality`] see each neighbour once.
 pub fn eta_grid(spec: &str) -> Result<Vec<f64>, String> {
     let parts: Vec<&str> = spec.split(':').collect();
     let [from, to, step] = parts[..] else {
