@@ -79,11 +79,13 @@ class Line:
 
 def run(order: int, a) -> list[tuple[float, float, float]]:
     rng = np.random.default_rng(a.seed)
-    line = Line(a.n, a.eta, 1.4, order)
+    gamma = 1.4
+    line = Line(a.n, a.eta, gamma, order)
     dx = 1.0 / a.n
     x = (np.arange(a.n) + 0.5) * dx + a.amplitude * dx * rng.uniform(-1, 1, a.n)
     m = np.full(a.n, dx)
-    y = np.array([x, np.zeros(a.n), np.full(a.n, (1 / 1.4) / 0.4)])
+    # P = 1/γ at ρ = 1, so c_s = 1: u = P / ((γ − 1) ρ)
+    y = np.array([x, np.zeros(a.n), np.full(a.n, (1 / gamma) / (gamma - 1))])
     t, dt, out = 0.0, a.cfl * dx, []
     f = lambda s: line.rates(s[0], s[1], s[2], m)  # noqa: E731
     while t < a.t_end - 1e-12:
