@@ -85,6 +85,26 @@ fn each_bad_value_names_its_key_and_range() {
 }
 
 #[test]
+fn a_stretched_interface_needs_uniform_densities() {
+    let interface = "\n[[interface]]\naxis = 0\nposition = 0.5\nwidth = 0.01\nstretch = true\n";
+    assert!(Case::parse(&format!("{SOD}{interface}")).is_ok());
+    let profiled = SOD.replacen(
+        "density = 0.125",
+        "density_profile = { expression = \"0.125\" }",
+        1,
+    );
+    assert!(
+        Case::parse(&profiled).is_ok(),
+        "the fixture with a profile alone is valid"
+    );
+    let msg = err_of(&format!("{profiled}{interface}"));
+    assert!(
+        msg.contains("interface[0].stretch") && msg.contains("region[1]"),
+        "{msg}"
+    );
+}
+
+#[test]
 fn malformed_toml_and_missing_tables() {
     let m = err_of("[case\nname = 1");
     assert!(m.starts_with("line 1"), "{m}");

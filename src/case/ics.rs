@@ -513,38 +513,22 @@ pub fn generate_particles<const D: usize>(
             crate::neighbours::MAX_PARTICLES
         )));
     }
-    // Smoothed interfaces: blend the states on either side with a logistic profile.
-    for f in &case.interfaces {
-        for i in 0..p.len() {
-            let x = p.pos[i];
-            let mut xl = x;
-            let mut xr = x;
-            xl[f.axis] = f.position - 1e-9 * (1.0 + f.position.abs());
-            xr[f.axis] = f.position + 1e-9 * (1.0 + f.position.abs());
-            let (Some(il), Some(ir)) = (region_at(case, &xl), region_at(case, &xr)) else {
-                continue;
-            };
-            if il == ir {
-                continue;
-            }
-            let (sl, sr) = (
-                state_of(case, &case.regions[il], &x, density_at(il, &x)?),
-                state_of(case, &case.regions[ir], &x, density_at(ir, &x)?),
-            );
-            let w = 1.0 / (1.0 + (-(x[f.axis] - f.position) / f.width).exp());
-            let rho = sl.rho + (sr.rho - sl.rho) * w;
-            // an interface smooths within one material: the particle's own EOS
-            let eos = case.eos_of(p.material[i]);
-            let pl = eos.pressure(sl.rho, sl.u);
-            let pr = eos.pressure(sr.rho, sr.u);
-            let pres = pl + (pr - pl) * w;
-            p.u[i] = match (case.regions[il].pressure, case.regions[ir].pressure) {
-                (Some(_), Some(_)) => eos.internal_energy(rho, pres),
-                _ => sl.u + (sr.u - sl.u) * w,
-            };
-            p.vel[i] = sl.vel + (sr.vel - sl.vel) * w;
-        }
-    }
+    // Smoothed interfaces: blend the states on either side (and with `stretch`, move the
+    // particles) with a logistic profile.
+    let state = |ri: usize, x: &Vector<D>| -> Result<(f64, f64, Vector<D>), CaseError> {
+        let s = state_of(case, &case.regions[ri], x, density_at(ri, x)?);
+        Ok((s.rho, s.u, s.vel))
+    };
+    let region = |x: &Vector<D>| region_at(case, x);
+    super::interface::apply(
+        case,
+        &mut p,
+        domain,
+        &super::interface::RegionLookup {
+            region_at: &region,
+            state: &state,
+        },
+    )?;
     let margin = case.domain.frozen_margin;
     if margin > 0.0 {
         for (x, f) in p.pos.iter().zip(p.frozen.iter_mut()) {

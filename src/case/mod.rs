@@ -7,6 +7,7 @@ mod estimate;
 pub mod fields;
 mod glass;
 mod ics;
+mod interface;
 mod overrides;
 mod ports;
 mod probes;

@@ -209,6 +209,10 @@ pub struct Interface {
     pub axis: usize,
     pub position: f64,
     pub width: f64,
+    /// Also move the particles along `axis` so their masses reproduce the smoothed density
+    /// (`interface.rs`); both sides need a uniform `density`.
+    #[serde(default)]
+    pub stretch: bool,
 }
 
 /// Random displacement of every particle by up to `amplitude` × its lattice spacing.

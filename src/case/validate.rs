@@ -139,6 +139,19 @@ impl Case {
                 )));
             }
             pos(&format!("interface[{i}].width"), f.width)?;
+            if f.stretch {
+                // the stretch inverts the step's mass integral, which needs ρ constant on
+                // either side (interface.rs)
+                if let Some(j) = self
+                    .regions
+                    .iter()
+                    .position(|r| r.density_profile.is_some())
+                {
+                    return Err(CaseError(format!(
+                        "interface[{i}].stretch: needs a uniform `density` in every region; region[{j}] has a density_profile"
+                    )));
+                }
+            }
         }
         if let Some(p) = &self.perturbation {
             if !(p.amplitude.is_finite() && (0.0..=0.5).contains(&p.amplitude)) {
