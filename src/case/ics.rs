@@ -515,7 +515,7 @@ pub fn generate_particles<const D: usize>(
     }
     // Smoothed interfaces: blend the states on either side (and with `stretch`, move the
     // particles) with a logistic profile.
-    let state = |ri: usize, x: &Vector<D>| -> Result<(f64, f64, Vector<D>), CaseError> {
+    let state = |ri: usize, x: &Vector<D>| -> Result<super::interface::RegionState<D>, CaseError> {
         let s = state_of(case, &case.regions[ri], x, density_at(ri, x)?);
         Ok((s.rho, s.u, s.vel))
     };

@@ -70,12 +70,15 @@ pub fn stretched(t: f64, rho_l: f64, rho_r: f64) -> f64 {
     s
 }
 
+/// (ρ, u, v) a region prescribes at a point.
+pub(super) type RegionState<const D: usize> = (f64, f64, Vector<D>);
+
 /// How the particle loop reads a region: its index at a point, its state there, and its
 /// density there.
 pub(super) struct RegionLookup<'a, const D: usize> {
     pub region_at: &'a dyn Fn(&Vector<D>) -> Option<usize>,
     /// (ρ, u, v) region i prescribes at x
-    pub state: &'a dyn Fn(usize, &Vector<D>) -> Result<(f64, f64, Vector<D>), CaseError>,
+    pub state: &'a dyn Fn(usize, &Vector<D>) -> Result<RegionState<D>, CaseError>,
 }
 
 /// Apply every `[[interface]]` of the case, in file order.
