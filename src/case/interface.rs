@@ -24,6 +24,11 @@ fn softplus(t: f64) -> f64 {
     }
 }
 
+/// The logistic weight of Eq. 96 at t widths from the plane (0 on the low side, 1 beyond).
+fn logistic(t: f64) -> f64 {
+    1.0 / (1.0 + (-t).exp())
+}
+
 /// Beyond this many widths from the plane the move is below e^{−36} ≈ 2e-16 of a width: the
 /// particle stays put, so lattices far from the plane stay exact.
 const FAR: f64 = 36.0;
@@ -55,7 +60,7 @@ pub fn stretched(t: f64, rho_l: f64, rho_r: f64) -> f64 {
         } else {
             hi = s;
         }
-        let slope = rho_l + (rho_r - rho_l) / (1.0 + (-s).exp());
+        let slope = rho_l + (rho_r - rho_l) * logistic(s);
         let newton = s - gs / slope;
         let next = if newton > lo && newton < hi {
             newton
@@ -73,8 +78,7 @@ pub fn stretched(t: f64, rho_l: f64, rho_r: f64) -> f64 {
 /// (ρ, u, v) a region prescribes at a point.
 pub(super) type RegionState<const D: usize> = (f64, f64, Vector<D>);
 
-/// How the particle loop reads a region: its index at a point, its state there, and its
-/// density there.
+/// How the particle loop reads a region: its index at a point and its state there.
 pub(super) struct RegionLookup<'a, const D: usize> {
     pub region_at: &'a dyn Fn(&Vector<D>) -> Option<usize>,
     /// (ρ, u, v) region i prescribes at x
@@ -111,7 +115,7 @@ pub(super) fn apply<const D: usize>(
                 p.pos[i] = x;
             }
             let (sl, sr) = ((look.state)(il, &x)?, (look.state)(ir, &x)?);
-            let w = 1.0 / (1.0 + (-(x[f.axis] - f.position) / f.width).exp());
+            let w = logistic((x[f.axis] - f.position) / f.width);
             let rho = sl.0 + (sr.0 - sl.0) * w;
             // an interface smooths within one material: the particle's own EOS
             let eos = case.eos_of(p.material[i]);
