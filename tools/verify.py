@@ -204,7 +204,9 @@ def judge_one(claim: dict, j: dict, figures: dict, seconds: dict | None = None) 
         series = figures[scheme]
         if label is None:
             label = list(series)[-1]  # the finest resolution
-        v = series[label]
+        if str(label) not in series:
+            raise ValueError(f"{scheme}: no run at N = {label}")
+        v = series[str(label)]
         if isinstance(v, str):
             raise ValueError(f"{scheme}: {v}")
         return v
@@ -233,11 +235,15 @@ def judge_one(claim: dict, j: dict, figures: dict, seconds: dict | None = None) 
             got = ea / eb
             text = f"{metric} at equal wall time ({t:.3g} s): {a} / {b} = {got:.3g} ({ea:.3g} / {eb:.3g})"
         elif kind == "ratio":
+            # `at`: the resolution both are read at (else each scheme's finest), for a claim
+            # whose finest resolution only some schemes run (a map at the paper's size)
             a, b = j["schemes"]
-            got = value(a) / value(b)
-            text = f"{metric} {a} / {b} = {got:.3g} ({value(a):.3g} / {value(b):.3g})"
+            va, vb = value(a, j.get("at")), value(b, j.get("at"))
+            got = va / vb
+            at = f" at N = {j['at']}" if "at" in j else ""
+            text = f"{metric} {a} / {b}{at} = {got:.3g} ({va:.3g} / {vb:.3g})"
         else:
-            got = value(j["scheme"])
+            got = value(j["scheme"], j.get("at"))
             text = f"{j['scheme']}: {metric} = {got:.4g}"
     except (ValueError, KeyError) as e:
         return "not reproduced", f"run failed: {e}"

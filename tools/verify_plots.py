@@ -333,22 +333,27 @@ def triple_point(claim: dict, runs: list, png: Path) -> None:
 
 @plot
 def blast_bubble(claim: dict, runs: list, png: Path) -> None:
-    """Rosswog (2015) Figs. 27–30: the judged scheme's density N at every snapshot (left
-    column, the paper's times), and every scheme's at t_end (right column)."""
+    """Rosswog (2015) Figs. 27–30: the judged scheme's density N at every snapshot of its
+    finest run (left column, the paper's times), and every scheme's at t_end at the resolution
+    the judge compares (right column)."""
     from verify_metrics import read_csv, snapshots
 
     best = finest(runs)
     judged = claim_scheme(claim) or next(iter(best))
     times = snapshots(best[judged][1].dir)[1:]
-    rows = max(len(times), len(best))
+    j = claim.get("judge", {})
+    at = (j if isinstance(j, dict) else (j or [{}])[0]).get("at")
+    compared = best if at is None else {s: (r, run, a) for s, r, run, a in runs if r == str(at)}
+    rows = max(len(times), len(compared))
     plt, fig, axes = figure(2, rows, size=(6.4, 2.1))
+    n_of = {r: f", N = {r}" if r else "" for _, r, _, _ in runs}
     for k, (t, path) in enumerate(times):
-        density_map(axes[2 * k], read_csv(path), f"{judged}: N at t = {t:g}")
-    for k, (scheme, (res, run, _)) in enumerate(best.items()):
-        density_map(axes[2 * k + 1], last_snapshot(run.dir), f"{scheme}: N at t_end")
+        density_map(axes[2 * k], read_csv(path), f"{judged}{n_of[best[judged][0]]}: N at t = {t:g}")
+    for k, (scheme, (res, run, _)) in enumerate(compared.items()):
+        density_map(axes[2 * k + 1], last_snapshot(run.dir), f"{scheme}{n_of[res]}: N at t_end")
     for k in range(len(times), rows):
         axes[2 * k].set_visible(False)
-    for k in range(len(best), rows):
+    for k in range(len(compared), rows):
         axes[2 * k + 1].set_visible(False)
     finish(plt, fig, claim, png, "relativistic blast–bubble: density N (computing frame)")
 

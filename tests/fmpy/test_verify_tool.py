@@ -41,6 +41,13 @@ def test_judges_decide_against_their_bounds():
     # a value is the finest resolution's
     assert verify.judge(claim("value", scheme="a", max=0.06), figures)[0] == "reproduced"
     assert verify.judge(claim("ratio", schemes=["b", "a"], min=3.9, max=4.1), figures)[0] == "reproduced"
+    # `at` reads both at one resolution, not each scheme's finest
+    finer = {"a": {"64": 0.05, "128": 0.01}, "b": {"64": 0.2}}
+    verdict, text = verify.judge(claim("ratio", schemes=["b", "a"], at="64", min=3.9, max=4.1), finer)
+    assert verdict == "reproduced" and "at N = 64" in text, text
+    assert verify.judge(claim("ratio", schemes=["b", "a"], min=3.9, max=4.1), finer)[0] == "not reproduced"
+    verdict, text = verify.judge(claim("ratio", schemes=["b", "a"], at="32", min=3.9), finer)
+    assert verdict == "not reproduced" and "no run at N = 32" in text, text
     # several judges: reproduced only when every one passes
     both = {"run": {"metric": "m"}, "judge": [{"kind": "value", "scheme": "a", "max": 0.06},
                                               {"kind": "order", "scheme": "a", "min": 1.1}]}
