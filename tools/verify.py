@@ -455,8 +455,11 @@ def main() -> int:
                         profile = run.dir / "profile.png"  # the finest resolution, last
                 if profile:
                     shutil.copy(profile, out / f"{c['id']}-profile.png")
-            # the command of the judged scheme's finest run (the first scheme's for a ratio)
-            first = next((run for s_, _, run, _ in reversed(plan[c["id"]]) if s_ == judged_label), plan[c["id"]][-1][2])
+            # the command of the judged scheme's finest run (the first scheme's for a ratio), or
+            # of its run at the resolution the judge reads (`at`)
+            at = next((str(j["at"]) for j in judges(c) if "at" in j), None)
+            first = next((run for s_, l_, run, _ in reversed(plan[c["id"]])
+                          if s_ == judged_label and at in (None, l_)), plan[c["id"]][-1][2])
             row.update(
                 verdict=verdict,
                 ours=ours,
@@ -501,8 +504,10 @@ def refresh_texts(rows: list[dict], suite: dict) -> list[dict]:
     which may have changed since."""
     texts = {c["id"]: c for c in suite["claim"]}
     for r in rows:
-        for k in ("claim", "paper_value", "note", "reduced"):
-            r[k] = texts.get(r["id"], {}).get(k, r.get(k, ""))
+        if r["id"] in texts:
+            # a key the suite no longer has (a row no longer reduced) goes from the row too
+            for k in ("claim", "paper_value", "note", "reduced"):
+                r[k] = texts[r["id"]].get(k, "")
         if "run" in texts.get(r["id"], {}):
             r["ideal"] = texts[r["id"]]["run"].get("ideal")
     return rows
