@@ -236,10 +236,11 @@ def maps(claim: dict, runs: list, png: Path) -> None:
 @plot
 def shock_radius_angle(claim: dict, runs: list, png: Path) -> None:
     """A blast wave's shock radius against angle, minus its mean, per scheme (a sixfold ripple
-    is the lattice's imprint), and the judged scheme's density map."""
-    from verify_metrics import shock_radius_by_angle
+    is the lattice's imprint), the judged scheme's density map, and ∇·v maps of the schemes the
+    judge compares (Rosswog 2015 §7.8.3 shows ∇·v for its noise), on one colour scale."""
+    from verify_metrics import shock_radius_by_angle, velocity_divergence
 
-    plt, fig, (ax_r, ax_m) = figure(2, size=(6.4, 4.6))
+    plt, fig, (ax_r, ax_m, *ax_div) = figure(2, 2, size=(6.4, 4.6))
     colour, _ = styles(runs)
     for scheme, (res, run, _) in finest(runs).items():
         phi, rs = shock_radius_by_angle(last_snapshot(run.dir))
@@ -250,6 +251,26 @@ def shock_radius_angle(claim: dict, runs: list, png: Path) -> None:
     ax_r.set_ylabel("shock radius − its mean")
     ax_r.legend(fontsize=6)
     judged_density_map(ax_m, claim, runs)
+    j = claim.get("judge", {})
+    j = j if isinstance(j, dict) else (j or [{}])[0]
+    best = finest(runs)
+    shown = [s for s in (j.get("schemes") or [j.get("scheme")]) if s in best][:2]
+    maps = {s: (last_snapshot(best[s][1].dir)) for s in shown}
+    divs = {s: velocity_divergence(m) for s, m in maps.items()}
+    # the scale of the flow away from the shock (the shock's own ∇·v is far larger): the 90th
+    # percentile of |∇·v| over both maps
+    lim = float(np.percentile(np.abs(np.concatenate(list(divs.values()))), 90)) if divs else 1.0
+    for ax, s in zip(ax_div, shown):
+        m = maps[s]
+        sc = ax.scatter(m["x"], m["y"], c=divs[s], s=max(0.3, 2e4 / len(m["x"])), cmap="RdBu_r",
+                        vmin=-lim, vmax=lim, linewidths=0, rasterized=True)
+        ax.set_aspect("equal")
+        ax.set_xlabel("x")
+        ax.set_ylabel("y")
+        ax.set_title(f"{s}: ∇·v at t_end (linearly exact estimate from the snapshot)", fontsize=8)
+        fig.colorbar(sc, ax=ax, shrink=0.8, label="∇·v")
+    for ax in ax_div[len(shown):]:
+        ax.set_visible(False)
     finish(plt, fig, claim, png, "blast in a box: the lattice's imprint on the shock")
 
 
