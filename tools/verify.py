@@ -35,7 +35,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from verify_metrics import METRICS, parse_kernel_table, summary_value  # noqa: E402
-from verify_plots import PLOTS  # noqa: E402
+from verify_plots import PLOTS, claim_scheme  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 # SPHFMU_BIN runs the suite with a copy of the binary, so a rebuild meanwhile cannot change it
@@ -168,12 +168,6 @@ def judges(claim: dict) -> list[dict]:
     pass (a claim with two parts, e.g. "30× less dissipation, and convergent")."""
     j = claim.get("judge", [])
     return [j] if isinstance(j, dict) else list(j)
-
-
-def judged_scheme(claim: dict) -> str | None:
-    """The scheme (or variant label) whose figure the first judge reads."""
-    j = (judges(claim) or [{}])[0]
-    return j.get("scheme") or (j.get("schemes") or [None])[0]
 
 
 def judge(claim: dict, figures: dict, seconds: dict | None = None) -> tuple[str, str]:
@@ -438,7 +432,7 @@ def main() -> int:
             verdict, ours = judge(c, figures, seconds) if "judge" in c else ("measured", "")
             png = out / f"{c['id']}.png"
             plot_claim(c, figures, png)
-            judged_label = judged_scheme(c)
+            judged_label = claim_scheme(c)
             profile = None
             if "plot" in c["run"]:
                 # the claim's own figure (growth curves, profiles, maps) from its runs

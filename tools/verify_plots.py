@@ -41,10 +41,15 @@ def finish(plt, fig, claim: dict, png: Path, caption: str) -> None:
     plt.close(fig)
 
 
+def first_judge(claim: dict) -> dict:
+    """The claim's `[claim.judge]` table, or the first of its `[[claim.judge]]` ({} if none)."""
+    j = claim.get("judge", [])
+    return j if isinstance(j, dict) else (j or [{}])[0]
+
+
 def claim_scheme(claim: dict) -> str | None:
     """The scheme (or variant) the claim's first judge reads."""
-    j = claim.get("judge", [])
-    j = j if isinstance(j, dict) else (j or [{}])[0]
+    j = first_judge(claim)
     return j.get("scheme") or (j.get("schemes") or [None])[0]
 
 
@@ -251,17 +256,16 @@ def shock_radius_angle(claim: dict, runs: list, png: Path) -> None:
     ax_r.set_ylabel("shock radius − its mean")
     ax_r.legend(fontsize=6)
     judged_density_map(ax_m, claim, runs)
-    j = claim.get("judge", {})
-    j = j if isinstance(j, dict) else (j or [{}])[0]
+    j = first_judge(claim)
     best = finest(runs)
     shown = [s for s in (j.get("schemes") or [j.get("scheme")]) if s in best][:2]
-    maps = {s: (last_snapshot(best[s][1].dir)) for s in shown}
-    divs = {s: velocity_divergence(m) for s, m in maps.items()}
+    snaps = {s: last_snapshot(best[s][1].dir) for s in shown}
+    divs = {s: velocity_divergence(m) for s, m in snaps.items()}
     # the scale of the flow away from the shock (the shock's own ∇·v is far larger): the 90th
     # percentile of |∇·v| over both maps
     lim = float(np.percentile(np.abs(np.concatenate(list(divs.values()))), 90)) if divs else 1.0
     for ax, s in zip(ax_div, shown):
-        m = maps[s]
+        m = snaps[s]
         sc = ax.scatter(m["x"], m["y"], c=divs[s], s=max(0.3, 2e4 / len(m["x"])), cmap="RdBu_r",
                         vmin=-lim, vmax=lim, linewidths=0, rasterized=True)
         ax.set_aspect("equal")
@@ -362,8 +366,7 @@ def blast_bubble(claim: dict, runs: list, png: Path) -> None:
     best = finest(runs)
     judged = claim_scheme(claim) or next(iter(best))
     times = snapshots(best[judged][1].dir)[1:]
-    j = claim.get("judge", {})
-    at = (j if isinstance(j, dict) else (j or [{}])[0]).get("at")
+    at = first_judge(claim).get("at")
     compared = best if at is None else {s: (r, run, a) for s, r, run, a in runs if r == str(at)}
     rows = max(len(times), len(compared))
     plt, fig, axes = figure(2, rows, size=(6.4, 2.1))
