@@ -55,3 +55,41 @@ def test_cost_cases_are_valid_cases(sphfmu_bin, tmp_path):
             assert f'integrator = "{integrator}"' in text
             r = run([sphfmu_bin, "check", case])
             assert r.returncode == 0, r.stdout + r.stderr
+
+
+def sod3d_summary(rate, l1, neighbours, wall):
+    return {"particle_updates_per_second": rate, "shock_tube": {"l1_density": l1},
+            "phase_seconds": [neighbours, 1.0, 0.1, 2.0], "wall_seconds": wall,
+            "neighbour_list_builds": 3, "steps": 10}
+
+
+def test_sod3d_against_swift_measured_on_this_cpu_else_the_proxy(monkeypatch, tmp_path):
+    monkeypatch.setattr(bench_goals, "run", lambda case, out, **k: sod3d_summary(5.0e5, 0.0092, 5.0, 10.0))
+    swift = {"rate": 4.0e5, "date": "2026-12-06", "command": "swift ...", "side_by_side": "1.3x"}
+    baselines = {"swift_lead_over_baseline": {"ratio": 3.2, "source": "issue"},
+                 "machines": {"A": {"sod3d": {"rate": 2.0e5, "commit": "c0"}, "swift_gadget2_sod3d": swift},
+                              "B": {"sod3d": {"rate": 2.0e5, "commit": "c0"}}}}
+    for model, figure, verdict in (("A", "5.000e+05 = 1.25x SWIFT's", "pass"),
+                                   ("B", "5.000e+05 = 2.50x our baseline", "short"),  # needs 3.2x
+                                   ("C", "5.000e+05", "unmeasured")):
+        g = bench_goals.Goals()
+        bench_goals.sod3d_goals(g, str(tmp_path), baselines, model)
+        speed, l1, share = g.rows[:3]
+        assert (speed["figure"], speed["verdict"]) == (figure, verdict), model
+        assert l1["verdict"] == "pass" and share["verdict"] == "short"  # 0.0092 <= 0.0104; 50 %
+
+
+def test_swift_reader_exact_solution_and_rate(tmp_path):
+    import swift_sod3d
+    # Toro (3rd ed.) Sod at gamma = 1.4: rho*_L 0.42632, rho*_R 0.26557
+    rho = swift_sod3d.exact_sod([0.1, 1.05, 1.1, 1.3, 1.9], 0.2, gamma=1.4)
+    assert abs(rho[0] - 1.0) < 1e-15 and abs(rho[-1] - 0.125) < 1e-15
+    assert abs(rho[2] - 0.42632) < 5e-5 and abs(rho[3] - 0.26557) < 5e-5
+    # step 0 is left out; wall-clock is in ms
+    lines = ["# Step Time ...",
+             "0 0.0 1 0 0.0 0 56 100 0 0 0 0 500.0 0 1.0",
+             "1 0.1 1 0 0.1 48 56 1000 0 0 0 0 100.0 0 1.0",
+             "2 0.2 1 0 0.1 48 56 3000 0 0 0 0 300.0 0 1.0"]
+    (tmp_path / "timesteps.txt").write_text("\n".join(lines) + "\n")
+    updates, wall, steps = swift_sod3d.swift_rate(str(tmp_path))
+    assert (updates, steps) == (4000.0, 2) and abs(wall - 0.4) < 1e-12
