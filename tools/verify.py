@@ -303,6 +303,29 @@ def plot_claim(claim: dict, figures: dict, png: Path) -> None:
 # ----------------------------------------------------------------------------- suite
 
 
+# What a `from` row takes from the row it names: what makes the runs, not how they are read.
+RUN_KEYS = ("model", "schemes", "variants", "resolutions", "set", "n_label")
+
+
+def load_suite(path: Path) -> dict:
+    """The suite with each `[claim.run] from = "ID"` filled in: that claim's runs (RUN_KEYS)
+    under this claim's own keys (metric, its arguments, plot, ...), so rows that read other metrics
+    of the same runs name those runs once. The runs' keys are the same as if written out."""
+    suite = tomllib.loads(path.read_text())
+    runs = {c["id"]: c.get("run") for c in suite["claim"]}
+    for c in suite["claim"]:
+        src = c.get("run", {}).get("from")
+        if src is None:
+            continue
+        base = runs.get(src)
+        if base is None or "from" in base:
+            raise ValueError(f"{c['id']}: run.from = {src!r} names no claim with a run table of its own")
+        own = {k: v for k, v in c["run"].items() if k != "from"}
+        shared = {k: json.loads(json.dumps(base[k])) for k in RUN_KEYS if k in base}
+        c["run"] = {**shared, **own}
+    return suite
+
+
 def expand(claim: dict, work: Path) -> list[tuple[str, str, Run, dict]]:
     """(scheme or variant label, resolution label, run, metric arguments) of a measured claim."""
     r = claim["run"]
@@ -339,7 +362,10 @@ def main() -> int:
     a = ap.parse_args()
     if a.jobs < 1:
         ap.error("--jobs: must be ≥ 1")
-    suite = tomllib.loads((ROOT / a.suite).read_text())
+    try:
+        suite = load_suite(ROOT / a.suite)
+    except ValueError as e:
+        ap.error(f"--suite: {e}")
     claims = suite["claim"]
     if a.only:
         wanted = set(a.only.split(","))

@@ -5,7 +5,6 @@ import math
 import re
 import subprocess
 import sys
-import tomllib
 
 from conftest import ROOT
 
@@ -81,7 +80,7 @@ def test_velocity_divergence_is_exact_for_a_linear_flow():
 
 
 def test_every_measured_entry_names_a_valid_case():
-    suite = tomllib.loads((ROOT / "models" / "verify" / "suite.toml").read_text())
+    suite = verify.load_suite(ROOT / "models" / "verify" / "suite.toml")
     ids = [c["id"] for c in suite["claim"]]
     assert len(ids) == len(set(ids)), "claim ids repeat"
     checked = 0
@@ -126,3 +125,37 @@ def test_report_only_repeats_the_header_of_the_run_that_last_measured(tmp_path):
         sys.argv = argv
     text = (out / "README.md").read_text()
     assert "Wall time of this run: 12.4 min (re-measured: rosswog-5;" in text, text[:600]
+
+
+def test_a_from_row_takes_the_named_rows_runs_and_keeps_its_own_reading(tmp_path):
+    base = """[[claim]]
+id = "a"
+[claim.run]
+model = "m.toml"
+schemes = ["s1", "s2"]
+resolutions = [{ n = 10, set = ["x=1"] }]
+metric = "m1"
+[claim.run.metric_args]
+k = 1
+[[claim]]
+id = "b"
+[claim.run]
+from = "%s"
+metric = "m2"
+"""
+    path = tmp_path / "suite.toml"
+    path.write_text(base % "a")
+    b = verify.load_suite(path)["claim"][1]["run"]
+    assert b == {"model": "m.toml", "schemes": ["s1", "s2"], "resolutions": [{"n": 10, "set": ["x=1"]}],
+                 "metric": "m2"}  # a's metric and its arguments stay a's
+    # the runs are the same ones: same keys for the work folder
+    a = verify.load_suite(path)["claim"][0]
+    assert [r.dir for _, _, r, _ in verify.expand(a, tmp_path)] == \
+        [r.dir for _, _, r, _ in verify.expand({"id": "b", "run": b}, tmp_path)]
+    path.write_text(base % "c")
+    try:
+        verify.load_suite(path)
+    except ValueError as e:
+        assert "run.from = 'c' names no claim" in str(e)
+    else:
+        raise AssertionError("an unknown run.from must be refused")
