@@ -25,50 +25,27 @@ import sys
 
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from verify_metrics import riemann_shock  # noqa: E402
 
-def exact_sod(x, t, x0=1.0, gamma=5.0 / 3.0, left=(1.0, 0.0, 1.0), right=(0.125, 0.0, 0.1)):
-    """Density of the exact solution (Toro ch. 4: Newton iteration on the pressure function)
-    at positions x, time t > 0, for left/right states (rho, u, p)."""
-    (rl, ul, pl), (rr, ur, pr) = left, right
+
+def exact_sod(x, t, x0=1.0, gamma=5.0 / 3.0, left=(1.0, 1.0), right=(0.125, 0.1)):
+    """Density of the exact solution at positions x, time t > 0, for gases at rest with left
+    and right states (rho, P), the left one at the higher pressure: p* and the shock speed from
+    verify_metrics.riemann_shock (Toro ch. 4), then the star densities (Toro Eqs. 4.50, 4.53),
+    u* behind the shock from its mass flux, and the left rarefaction fan (Toro Eq. 4.56)."""
+    (rl, pl), (rr, pr) = left, right
     g = gamma
-    cl, cr = math.sqrt(g * pl / rl), math.sqrt(g * pr / rr)
-
-    def f(p, rk, pk, ck):
-        if p > pk:  # shock (Toro Eq. 4.21)
-            a, b = 2.0 / ((g + 1.0) * rk), (g - 1.0) / (g + 1.0) * pk
-            q = math.sqrt(a / (p + b))
-            return (p - pk) * q, q * (1.0 - 0.5 * (p - pk) / (p + b))
-        # rarefaction (Toro Eq. 4.26)
-        e = (g - 1.0) / (2.0 * g)
-        return 2.0 * ck / (g - 1.0) * ((p / pk) ** e - 1.0), (p / pk) ** (-(g + 1.0) / (2.0 * g)) / (rk * ck)
-
-    p = 0.5 * (pl + pr)
-    for _ in range(100):
-        fl, dl = f(p, rl, pl, cl)
-        fr, dr = f(p, rr, pr, cr)
-        step = (fl + fr + ur - ul) / (dl + dr)
-        p = max(p - step, 1e-12)
-        if abs(step) < 1e-14 * p:
-            break
-    us = 0.5 * (ul + ur) + 0.5 * (f(p, rr, pr, cr)[0] - f(p, rl, pl, cl)[0])
-
-    def star_density(rk, pk):
-        if p > pk:
-            q = (g - 1.0) / (g + 1.0)
-            return rk * (p / pk + q) / (q * p / pk + 1.0)
-        return rk * (p / pk) ** (1.0 / g)
-
-    rsl, rsr = star_density(rl, pl), star_density(rr, pr)
+    p, shock = riemann_shock((rl, pl, g), (rr, pr, g))
+    q = (g - 1.0) / (g + 1.0)
+    rsr = rr * (p / pr + q) / (q * p / pr + 1.0)  # behind the shock
+    rsl = rl * (p / pl) ** (1.0 / g)  # behind the rarefaction
+    us = shock * (1.0 - rr / rsr)  # rho_R S = rho*_R (S - u*)
+    cl = math.sqrt(g * pl / rl)
+    head, tail = -cl, us - cl * (p / pl) ** ((g - 1.0) / (2.0 * g))
     s = (np.asarray(x, dtype=float) - x0) / t
-    rho = np.empty_like(s)
-    # left wave: a rarefaction for Sod (p* < pl)
-    head, tail = ul - cl, us - cl * (p / pl) ** ((g - 1.0) / (2.0 * g))
-    fan = rl * (2.0 / (g + 1.0) + (g - 1.0) / ((g + 1.0) * cl) * (ul - s)) ** (2.0 / (g - 1.0))
-    # right wave: a shock (p* > pr)
-    shock = ur + cr * math.sqrt((g + 1.0) / (2.0 * g) * p / pr + (g - 1.0) / (2.0 * g))
-    assert p < pl and p > pr, "exact_sod: only the Sod wave pattern (rarefaction, shock)"
-    rho[:] = np.where(s < head, rl, np.where(s < tail, fan, np.where(s < us, rsl, np.where(s < shock, rsr, rr))))
-    return rho
+    fan = rl * (2.0 / (g + 1.0) - (g - 1.0) / ((g + 1.0) * cl) * s) ** (2.0 / (g - 1.0))
+    return np.where(s < head, rl, np.where(s < tail, fan, np.where(s < us, rsl, np.where(s < shock, rsr, rr))))
 
 
 def swift_rate(run_dir):
@@ -99,9 +76,14 @@ def main():
     updates, wall, steps = swift_rate(args.run_dir)
     print(f"steps after step 0: {steps}, updates {updates:.6g}, wall-clock {wall:.3f} s, "
           f"rate {updates / wall:.4e} particle-updates/s")
-    import h5py
-
-    snap = args.snapshot or sorted(glob.glob(os.path.join(args.run_dir, "sodShock_*.hdf5")))[-1]
+    try:
+        import h5py
+    except ImportError:
+        sys.exit("swift_sod3d: reading the snapshot needs h5py (pip install h5py)")
+    snaps = sorted(glob.glob(os.path.join(args.run_dir, "sodShock_*.hdf5")))
+    if not args.snapshot and not snaps:
+        sys.exit(f"swift_sod3d: no sodShock_*.hdf5 snapshot in {args.run_dir}")
+    snap = args.snapshot or snaps[-1]
     with h5py.File(os.path.join(args.run_dir, os.path.basename(snap)), "r") as fh:
         t = float(np.atleast_1d(fh["Header"].attrs["Time"])[0])
         x = fh["PartType0/Coordinates"][:, 0]
