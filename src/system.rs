@@ -306,6 +306,7 @@ impl<const D: usize> System<D> {
     /// its build positions and radii along, so a reorder costs no rebuild.
     pub fn permute_particles(&mut self, perm: &[u32]) {
         self.particles.permute(perm);
+        self.grid.permute(perm);
         let v = &mut self.verlet;
         if v.pos.len() == perm.len() && v.list.offsets.len() == perm.len() + 1 {
             v.list = v.list.permuted(perm);

@@ -238,3 +238,55 @@ fn build_matches_brute_force_on_integrator_states() {
         "no build state had a particle outside the box: the test would not show what it is for"
     );
 }
+
+/// Reordering numbers the particles in the grid's cell order even when the particles were
+/// renumbered since the grid was built, and a second reorder without a rebuild in between
+/// changes nothing. The grid's cell order was once left in the numbering of its build, so a
+/// case that rarely rebuilds (the closed tank: one build in 7,728 steps) applied that stale
+/// permutation again every 20 steps and scrambled its particles' order.
+#[test]
+fn reorder_follows_the_cells_through_renumbering() {
+    let text = common::header(2, 0.0, 1.0, "periodic", 1.4)
+        + "[time]\nt_end = 1.0\n[[region]]\nspacing = 0.05\ndensity = 1.0\npressure = 1.0\n";
+    let case = sphfmu::case::Case::parse(&text).unwrap();
+    let mut sim = case.build::<2>().unwrap();
+    sim.step(f64::INFINITY).unwrap();
+    let n = sim.sys.particles.len();
+    assert_eq!(sim.sys.grid.sorted.len(), n, "the first step built a grid");
+    // any renumbering: a fixed shuffle (multiplicative, coprime stride)
+    let stride = (1..n)
+        .rev()
+        .find(|s| gcd(*s, n) == 1 && *s > n / 3)
+        .unwrap();
+    let shuffle: Vec<u32> = (0..n).map(|i| ((i * stride + 7) % n) as u32).collect();
+    sim.sys.permute_particles(&shuffle);
+    sim.reorder();
+    let identity: Vec<u32> = (0..n as u32).collect();
+    assert_eq!(
+        sim.sys.grid.sorted, identity,
+        "after a reorder particle i is the i-th in cell order"
+    );
+    let ids: Vec<_> = sim.sys.particles.id.clone();
+    sim.reorder();
+    assert_eq!(
+        sim.sys.particles.id, ids,
+        "a second reorder renumbered again"
+    );
+    // and the lists that came along still match the positions
+    sim.step(f64::INFINITY).unwrap();
+    let p = &sim.sys.particles;
+    let reach: Vec<f64> = p.h.iter().map(|&h| 2.0 * h).collect();
+    assert_same_lists(
+        &sim.sys.neighbours,
+        &brute_force(&p.pos, &reach, &sim.sys.domain),
+        "after the reorders",
+    );
+}
+
+fn gcd(a: usize, b: usize) -> usize {
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
+}

@@ -138,6 +138,20 @@ impl<const D: usize> CellGrid<D> {
         c
     }
 
+    /// Rename the particles of [`Self::sorted`] after a reorder (new index i = old index
+    /// `perm[i]`); the cells stay as they are. Without it the cell order stayed in the
+    /// numbering of the grid's build, and the next reorder before a rebuild applied it to
+    /// particles already renumbered.
+    pub fn permute(&mut self, perm: &[u32]) {
+        if self.sorted.len() != perm.len() {
+            return;
+        }
+        let inv = super::inverse(perm);
+        for s in &mut self.sorted {
+            *s = inv[*s as usize];
+        }
+    }
+
     /// Visit every cell that can hold points within `reach` of the point with local
     /// coordinates `y` (see [`Self::local`]), in runs of neighbouring cells along x, as
     /// `f(start, end, shift)`: positions `start..end` of [`Self::sorted`] hold the run's

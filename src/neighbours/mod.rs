@@ -243,12 +243,8 @@ impl NeighbourList {
     /// The same lists after the particles were reordered so that new index i is old index
     /// `perm[i]` (rows moved, neighbour indices renamed, image codes kept).
     pub fn permuted(&self, perm: &[u32]) -> Self {
-        let n = perm.len();
-        let mut inv = vec![0u32; n];
-        for (new, &old) in perm.iter().enumerate() {
-            inv[old as usize] = new as u32;
-        }
-        Self::from_rows(n, |i, out| {
+        let inv = inverse(perm);
+        Self::from_rows(perm.len(), |i, out| {
             out.extend(self.of(perm[i] as usize).iter().map(|&e| {
                 let (b, code) = unpack(e);
                 pack(inv[b] as usize, code)
@@ -304,6 +300,15 @@ impl NeighbourList {
         }
         Self { offsets, entries }
     }
+}
+
+/// The inverse of the renumbering "new index i = old index `perm[i]`": old index → new.
+pub(crate) fn inverse(perm: &[u32]) -> Vec<u32> {
+    let mut inv = vec![0u32; perm.len()];
+    for (new, &old) in perm.iter().enumerate() {
+        inv[old as usize] = new as u32;
+    }
+    inv
 }
 
 /// O(N²) reference: same rule as [`NeighbourList::build`], for tests. Lists come sorted.
