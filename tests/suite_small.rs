@@ -51,6 +51,24 @@ fn rpsph_keeps_an_isobaric_blob_and_lattice_at_rest_where_sph_moves() {
 }
 
 #[test]
+fn a_seeded_lattice_at_20_neighbours_grows_sph_noise_but_not_rpsph() {
+    // Abel (2011) §3.1, Fig. 1's thick line (rpsph-1): 50² at rest, 20 neighbours, positions
+    // moved by up to 1e-6 of the spacing (single-precision rounding); to t = 2.5, the peak
+    for scheme in ["rpsph", "standard"] {
+        let sets = ["kernel.eta=1.2616", "perturbation.amplitude=1e-6"];
+        let v = vrms(&run("lattice-rest.toml", Some(scheme), &sets, 2.5));
+        println!("{scheme}: seeded lattice at 20 neighbours, v_rms {v:.3e} at t = 2.5");
+        if scheme == "rpsph" {
+            // measured 2.6e-15: the pressure is uniform, so the force is zero
+            assert!(v < 1e-12, "{v}");
+        } else {
+            // measured 2.9e-3 (from 4.4e-7 at t = 0.5): the lattice is unstable here
+            assert!(v > 1e-3, "{v}");
+        }
+    }
+}
+
+#[test]
 fn shearing_noh_crksph_keeps_the_shock_near_its_exact_place() {
     // CRKSPH §4.4.5 (crksph-13) at half the paper's resolution (10 × 50), t = 0.6: the highest
     // y where the density exceeds 2.5 against the exact 0.2
