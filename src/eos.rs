@@ -56,7 +56,7 @@ fn default_tait_gamma() -> f64 {
 /// x^e for the Tait law's exponents (γ in P, (γ−1)/2 in c): by multiplication when e is a
 /// whole number (γ = 7 gives 7 and 3, the usual liquid), else `powf`. The library `pow` was
 /// 4–5 % of the closed tank's samples (`perf`, 2026-12-07), called twice per particle and step;
-/// `powi` is a handful of multiplies, within 1e-15 of it (tested below).
+/// `powi` is a handful of multiplies, within 1e-14 of it (tests/eos.rs).
 #[inline]
 fn tait_power(x: f64, e: f64) -> f64 {
     if e == e.trunc() && e.abs() <= 16.0 {
