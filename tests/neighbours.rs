@@ -28,6 +28,15 @@ fn assert_same_lists(list: &NeighbourList, reference: &[Vec<u32>], label: &str) 
     total
 }
 
+/// The simulation's working list equals brute force over its current positions and
+/// kernel supports 2h.
+fn assert_working_list_exact(sim: &sphfmu::sim::Simulation<2>, label: &str) {
+    let p = &sim.sys.particles;
+    let reach: Vec<f64> = p.h.iter().map(|&h| 2.0 * h).collect();
+    let reference = brute_force(&p.pos, &reach, &sim.sys.domain);
+    assert_same_lists(&sim.sys.neighbours, &reference, label);
+}
+
 fn check<const D: usize>(pos: &[Vector<D>], reach: &[f64], dom: &Domain<D>) -> usize {
     let grid = CellGrid::build(pos, dom, reach);
     let list = NeighbourList::build(pos, reach, dom, &grid);
@@ -154,11 +163,7 @@ seed = 3
     let builds0 = sim.sys.verlet.builds;
     for _ in 0..12 {
         sim.step(f64::INFINITY).unwrap();
-        let p = &sim.sys.particles;
-        let reach: Vec<f64> = p.h.iter().map(|&h| 2.0 * h).collect();
-        let reference = brute_force(&p.pos, &reach, &sim.sys.domain);
-        let label = format!("at step {}", sim.steps);
-        assert_same_lists(&sim.sys.neighbours, &reference, &label);
+        assert_working_list_exact(&sim, &format!("at step {}", sim.steps));
     }
     // the point of the skin: fewer builds than evaluations
     assert!(
@@ -197,10 +202,7 @@ fn uniform_drift_keeps_the_master_list() {
         sim.sys.verlet.builds, builds0,
         "master list rebuilt under a uniform drift"
     );
-    let p = &sim.sys.particles;
-    let reach: Vec<f64> = p.h.iter().map(|&h| 2.0 * h).collect();
-    let reference = brute_force(&p.pos, &reach, &sim.sys.domain);
-    assert_same_lists(&sim.sys.neighbours, &reference, "after the drift");
+    assert_working_list_exact(&sim, "after the drift");
 }
 
 /// The grid search equals brute force on the master lists' own build states of a violent
@@ -274,11 +276,5 @@ fn reorder_follows_the_cells_through_renumbering() {
     );
     // and the lists that came along still match the positions
     sim.step(f64::INFINITY).unwrap();
-    let p = &sim.sys.particles;
-    let reach: Vec<f64> = p.h.iter().map(|&h| 2.0 * h).collect();
-    assert_same_lists(
-        &sim.sys.neighbours,
-        &brute_force(&p.pos, &reach, &sim.sys.domain),
-        "after the reorders",
-    );
+    assert_working_list_exact(&sim, "after the reorders");
 }
