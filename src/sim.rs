@@ -431,37 +431,78 @@ impl<const D: usize> Simulation<D> {
             return self.relativistic_diagnostics(sr);
         }
         let p = &self.sys.particles;
-        let mut d = self.diagnostics_header();
         let g = if self.sys.frame.is_none() {
             self.sys.gravity
         } else {
             Vector::<D>::zeros()
         };
-        for a in 0..self.sys.owned() {
-            // the fluid only: wall particles belong to bodies, whose loads are reported apart,
-            // and port buffers are outside the domain
-            if p.body[a] != 0 || p.port[a] != 0 {
-                continue;
+        let mut d = self.totals(|range| {
+            let mut d = Diagnostics::default();
+            for a in range {
+                // the fluid only: wall particles belong to bodies, whose loads are reported
+                // apart, and port buffers are outside the domain
+                if p.body[a] != 0 || p.port[a] != 0 {
+                    continue;
+                }
+                d.fluid_particles += 1;
+                let m = p.mass[a];
+                let v = p.vel[a];
+                let x = p.pos[a];
+                d.mass += m;
+                for k in 0..D {
+                    d.momentum[k] += m * v[k];
+                }
+                let (x3, v3) = (to3(&x), to3(&v));
+                let l = x3.cross(&v3) * m;
+                for k in 0..3 {
+                    d.angular_momentum[k] += l[k];
+                }
+                d.kinetic_energy += 0.5 * m * v.norm_squared();
+                d.internal_energy += m * p.u[a];
+                d.potential_energy -= m * g.dot(&x);
             }
-            d.fluid_particles += 1;
-            let m = p.mass[a];
-            let v = p.vel[a];
-            let x = p.pos[a];
-            d.mass += m;
-            for k in 0..D {
-                d.momentum[k] += m * v[k];
-            }
-            let (x3, v3) = (to3(&x), to3(&v));
-            let l = x3.cross(&v3) * m;
-            for k in 0..3 {
-                d.angular_momentum[k] += l[k];
-            }
-            d.kinetic_energy += 0.5 * m * v.norm_squared();
-            d.internal_energy += m * p.u[a];
-            d.potential_energy -= m * g.dot(&x);
-        }
+            d
+        });
         d.total_energy = d.kinetic_energy + d.internal_energy + d.potential_energy;
         d
+    }
+
+    /// The header ([`Self::diagnostics_header`]) with the totals of `block` over the owned
+    /// particles, summed in fixed blocks ([`crate::threads::block_reduce`]: in parallel, and
+    /// the same bits on any thread count).
+    fn totals(&self, block: impl Fn(std::ops::Range<usize>) -> Diagnostics + Sync) -> Diagnostics {
+        let t = crate::threads::block_reduce(
+            self.sys.owned(),
+            block,
+            |a, b| Diagnostics {
+                fluid_particles: a.fluid_particles + b.fluid_particles,
+                mass: a.mass + b.mass,
+                momentum: std::array::from_fn(|k| a.momentum[k] + b.momentum[k]),
+                angular_momentum: std::array::from_fn(|k| {
+                    a.angular_momentum[k] + b.angular_momentum[k]
+                }),
+                kinetic_energy: a.kinetic_energy + b.kinetic_energy,
+                internal_energy: a.internal_energy + b.internal_energy,
+                potential_energy: a.potential_energy + b.potential_energy,
+                total_energy: a.total_energy + b.total_energy,
+                max_lorentz: a.max_lorentz.max(b.max_lorentz),
+                ..a
+            },
+            Diagnostics::default(),
+        );
+        let header = self.diagnostics_header();
+        Diagnostics {
+            max_lorentz: header.max_lorentz.max(t.max_lorentz),
+            fluid_particles: t.fluid_particles,
+            mass: t.mass,
+            momentum: t.momentum,
+            angular_momentum: t.angular_momentum,
+            kinetic_energy: t.kinetic_energy,
+            internal_energy: t.internal_energy,
+            potential_energy: t.potential_energy,
+            total_energy: t.total_energy,
+            ..header
+        }
     }
 
     /// Time, step and counts of [`Diagnostics`], every total zero, the Lorentz factor 1.
@@ -482,27 +523,30 @@ impl<const D: usize> Simulation<D> {
     /// Σ ν (γ − 1) and internal the rest.
     fn relativistic_diagnostics(&self, sr: crate::scheme::rosswog::sr::SrSlots) -> Diagnostics {
         let p = &self.sys.particles;
-        let mut d = self.diagnostics_header();
         let (s, eps, lorentz) = (
             &p.extra_vectors[sr.momentum],
             &p.extra_scalars[sr.energy],
             &p.extra_scalars[sr.lorentz],
         );
-        for a in 0..self.sys.owned() {
-            d.fluid_particles += 1;
-            let nu = p.mass[a];
-            d.mass += nu;
-            for (m, s_k) in d.momentum.iter_mut().zip(s[a].iter()) {
-                *m += nu * s_k;
+        let mut d = self.totals(|range| {
+            let mut d = Diagnostics::default();
+            for a in range {
+                d.fluid_particles += 1;
+                let nu = p.mass[a];
+                d.mass += nu;
+                for (m, s_k) in d.momentum.iter_mut().zip(s[a].iter()) {
+                    *m += nu * s_k;
+                }
+                let l = to3(&p.pos[a]).cross(&to3(&s[a])) * nu;
+                for k in 0..3 {
+                    d.angular_momentum[k] += l[k];
+                }
+                d.total_energy += nu * (eps[a] - 1.0);
+                d.kinetic_energy += nu * (lorentz[a] - 1.0);
+                d.max_lorentz = d.max_lorentz.max(lorentz[a]);
             }
-            let l = to3(&p.pos[a]).cross(&to3(&s[a])) * nu;
-            for k in 0..3 {
-                d.angular_momentum[k] += l[k];
-            }
-            d.total_energy += nu * (eps[a] - 1.0);
-            d.kinetic_energy += nu * (lorentz[a] - 1.0);
-            d.max_lorentz = d.max_lorentz.max(lorentz[a]);
-        }
+            d
+        });
         d.internal_energy = d.total_energy - d.kinetic_energy;
         d
     }

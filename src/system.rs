@@ -519,20 +519,24 @@ impl<const D: usize> System<D> {
     /// (halo copies are their owners' to check).
     pub fn first_non_finite(&self) -> Option<(usize, &'static str)> {
         let p = &self.particles;
-        (0..self.owned()).find_map(|i| {
-            if !p.pos[i].iter().all(|x| x.is_finite()) {
-                Some((i, "position"))
-            } else if !p.vel[i].iter().all(|x| x.is_finite()) {
-                Some((i, "velocity"))
-            } else if !p.u[i].is_finite() {
-                Some((i, "internal energy"))
-            } else if !(p.rho[i].is_finite() && p.rho[i] > 0.0) {
-                Some((i, "density"))
-            } else if !(p.h[i].is_finite() && p.h[i] > 0.0) {
-                Some((i, "smoothing length"))
-            } else {
-                None
-            }
-        })
+        // the first such particle by index, whatever the thread count (`find_map_first`)
+        (0..self.owned())
+            .into_par_iter()
+            .with_min_len(LIGHT)
+            .find_map_first(|i| {
+                if !p.pos[i].iter().all(|x| x.is_finite()) {
+                    Some((i, "position"))
+                } else if !p.vel[i].iter().all(|x| x.is_finite()) {
+                    Some((i, "velocity"))
+                } else if !p.u[i].is_finite() {
+                    Some((i, "internal energy"))
+                } else if !(p.rho[i].is_finite() && p.rho[i] > 0.0) {
+                    Some((i, "density"))
+                } else if !(p.h[i].is_finite() && p.h[i] > 0.0) {
+                    Some((i, "smoothing length"))
+                } else {
+                    None
+                }
+            })
     }
 }

@@ -20,6 +20,30 @@ pub const LIGHT: usize = 4096;
 /// element's cost, not a measurement.
 pub const MEDIUM: usize = 512;
 
+/// Elements per block of [`block_reduce`]. Fixed, so the grouping of a sum's terms depends
+/// on the element count only.
+pub const BLOCK: usize = 1024;
+
+/// Reduce `0..n` in blocks of [`BLOCK`] elements: `block(range)` gives each block's partial
+/// result (blocks in parallel), and `combine` joins the partials in block order on the
+/// calling thread. The result is the same bits on any number of threads, which rayon's own
+/// `reduce` (whose splits follow the work stealing) does not promise for floating-point sums.
+/// Why: the per-step totals (diagnostics, the momentum scale, the finite check) were serial
+/// loops, 3 % of a one-thread Noh 2D run that a second thread did not share (BENCHMARKS.md).
+pub fn block_reduce<T: Send>(
+    n: usize,
+    block: impl Fn(std::ops::Range<usize>) -> T + Sync,
+    combine: impl FnMut(T, T) -> T,
+    empty: T,
+) -> T {
+    use rayon::prelude::*;
+    let parts: Vec<T> = (0..n.div_ceil(BLOCK))
+        .into_par_iter()
+        .map(|b| block(b * BLOCK..((b + 1) * BLOCK).min(n)))
+        .collect();
+    parts.into_iter().fold(empty, combine)
+}
+
 thread_local! {
     /// Whether this thread is inside [`with_partner_awake`]'s step.
     static STEPPING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
@@ -112,6 +136,24 @@ mod tests {
             x[0] = x.iter().fold(0, |a, b| a ^ b);
         }
         x.iter().fold(0, |a, b| a.wrapping_add(*b))
+    }
+
+    #[test]
+    fn block_sums_are_the_same_bits_on_any_pool() {
+        // terms of very different size, so the grouping shows in the last bits
+        let x: Vec<f64> = (0..5000)
+            .map(|i| 1.0 / (1.0 + i as f64).powi(3) + 1e3 * (i % 7) as f64)
+            .collect();
+        let sum = || block_reduce(x.len(), |r| x[r].iter().sum::<f64>(), |a, b| a + b, 0.0);
+        let expected: f64 = x.chunks(BLOCK).map(|c| c.iter().sum::<f64>()).sum();
+        for n in 1..=3 {
+            assert_eq!(pool(n).install(sum).to_bits(), expected.to_bits());
+        }
+        assert_eq!(
+            block_reduce(0, |_| 1.0, |a, b| a + b, 0.0),
+            0.0,
+            "no blocks: the empty value"
+        );
     }
 
     #[test]

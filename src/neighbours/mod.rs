@@ -290,14 +290,25 @@ impl NeighbourList {
     fn concat(n: usize, parts: Vec<(Vec<u32>, Vec<u32>)>) -> Self {
         let mut offsets = Vec::with_capacity(n + 1);
         offsets.push(0usize);
-        let total: usize = parts.iter().map(|p| p.1.len()).sum();
-        let mut entries = Vec::with_capacity(total);
-        for (counts, out) in parts {
-            for c in counts {
+        for (counts, _) in &parts {
+            for &c in counts {
                 offsets.push(offsets.last().unwrap() + c as usize);
             }
-            entries.extend_from_slice(&out);
         }
+        // each part's entries copied into its own slice of the array, in parallel (joined
+        // on one thread, the copy was a serial stretch of every step's cut)
+        let mut entries = vec![0u32; offsets[n]];
+        let mut slices = Vec::with_capacity(parts.len());
+        let mut rest = &mut entries[..];
+        for (_, out) in &parts {
+            let (slice, tail) = rest.split_at_mut(out.len());
+            slices.push(slice);
+            rest = tail;
+        }
+        parts
+            .par_iter()
+            .zip(slices)
+            .for_each(|((_, out), slice)| slice.copy_from_slice(out));
         Self { offsets, entries }
     }
 }

@@ -367,11 +367,17 @@ fn run_dim<const D: usize>(
                     Some(sr) => p.extra_vectors[sr.momentum][i].norm(),
                     None => p.vel[i].norm(),
                 };
-                let (mut scale, mut mass) = (0..s.sys.owned())
-                    .filter(|&i| p.body[i] == 0 && p.port[i] == 0)
-                    .fold((0.0, 0.0), |(s, m), i| {
-                        (s + p.mass[i] * momentum(i), m + p.mass[i])
-                    });
+                let (mut scale, mut mass) = crate::threads::block_reduce(
+                    s.sys.owned(),
+                    |r| {
+                        r.filter(|&i| p.body[i] == 0 && p.port[i] == 0)
+                            .fold((0.0, 0.0), |(s, m), i| {
+                                (s + p.mass[i] * momentum(i), m + p.mass[i])
+                            })
+                    },
+                    |a, b| (a.0 + b.0, a.1 + b.1),
+                    (0.0, 0.0),
+                );
                 if let Some(layout) = &s.layout {
                     let t = layout.sum(&[scale, mass]).unwrap_or(vec![f64::NAN; 2]);
                     (scale, mass) = (t[0], t[1]);

@@ -9,6 +9,8 @@ use crate::neighbours::lanes::{for_each_row, RowPass};
 use crate::neighbours::unpack;
 use crate::parallel::rows;
 use crate::system::System;
+use crate::threads::LIGHT;
+use rayon::prelude::*;
 
 /// Relative density tolerance of the h iteration (foundation issue; Rosswog §7.2).
 pub const DENSITY_TOLERANCE: f64 = 1e-4;
@@ -106,22 +108,48 @@ fn solve<const D: usize>(
         rounds += 1;
         let last = rounds >= MAX_ROUNDS;
         let p = &mut sys.particles;
-        let mut still = Vec::new();
-        let mut capped = 0u64;
-        for (&a, r) in pending.iter().zip(&results) {
-            let a = a as usize;
-            iters += r.iterations as u64;
-            capped += r.capped as u64;
-            if r.needs_rebuild && !last {
-                // the rebuilt list reaches beyond both its start and where its path stopped
-                p.h[a] = r.h.max(start_h[a]);
-                still.push(a as u32);
+        let rebuild = |r: &HSolve| r.needs_rebuild && !last;
+        // a particle whose path outgrew the list starts its next round from beyond both its
+        // start and where the path stopped (the rebuilt list reaches that far); the others
+        // keep their result
+        let apply = |r: &HSolve, h0: f64, (h, rho, omega): (&mut f64, &mut f64, &mut f64)| {
+            if rebuild(r) {
+                *h = r.h.max(h0);
             } else {
-                p.h[a] = r.h;
-                p.rho[a] = r.rho;
-                p.omega[a] = r.omega;
-                if let Some((_, sums)) = &mut extra {
-                    sums[a] = r.sums;
+                (*h, *rho, *omega) = (r.h, r.rho, r.omega);
+            }
+        };
+        let (its, capped) = results
+            .par_iter()
+            .with_min_len(LIGHT)
+            .map(|r| (r.iterations as u64, r.capped as u64))
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        iters += its;
+        let still: Vec<u32> = pending
+            .par_iter()
+            .zip(&results)
+            .filter(|(_, r)| rebuild(r))
+            .map(|(&a, _)| a)
+            .collect();
+        if pending.len() == p.len() {
+            // the first round solves everyone in order: written back in parallel (on one
+            // thread, this was a serial stretch of every step)
+            p.h.par_iter_mut()
+                .zip(p.rho.par_iter_mut())
+                .zip(p.omega.par_iter_mut())
+                .zip(results.par_iter().zip(&start_h))
+                .with_min_len(LIGHT)
+                .for_each(|(((h, rho), omega), (r, &h0))| apply(r, h0, (h, rho, omega)));
+        } else {
+            for (&a, r) in pending.iter().zip(&results) {
+                let a = a as usize;
+                apply(r, start_h[a], (&mut p.h[a], &mut p.rho[a], &mut p.omega[a]));
+            }
+        }
+        if let Some((_, sums)) = &mut extra {
+            for (&a, r) in pending.iter().zip(&results) {
+                if !rebuild(r) {
+                    sums[a as usize] = r.sums;
                 }
             }
         }
@@ -188,7 +216,12 @@ struct SolvePass<'a, const D: usize> {
 impl<const D: usize> KernelVisitor<D> for SolvePass<'_, D> {
     type Output = Vec<HSolve>;
     fn visit<K: Kernel + Copy>(self, kernel: &DimKernel<D, K>) -> Vec<HSolve> {
-        let mut out: Vec<HSolve> = self.pending.iter().map(|_| HSolve::default()).collect();
+        let mut out: Vec<HSolve> = self
+            .pending
+            .par_iter()
+            .with_min_len(LIGHT)
+            .map(|_| HSolve::default())
+            .collect();
         for_each_row(&SolveRows { v: &self, kernel }, &mut out);
         out
     }

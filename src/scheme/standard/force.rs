@@ -165,9 +165,12 @@ pub(crate) fn force_pass<const D: usize>(
         out: &mut out,
     });
     sys.store_derivatives(t0, |a| (out[a].acc, out[a].dudt, out[a].vsig));
-    for (d, o) in sys.particles.drhodt.iter_mut().zip(&out) {
-        *d = o.drho;
-    }
+    sys.particles
+        .drhodt
+        .par_iter_mut()
+        .zip(&out)
+        .with_min_len(LIGHT)
+        .for_each(|(d, o)| *d = o.drho);
 }
 
 /// The force pass's inputs, handed the concrete kernel by [`DimKernel::visit`].
