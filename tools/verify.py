@@ -285,7 +285,7 @@ def plot_claim(claim: dict, figures: dict, png: Path) -> None:
         if pos and max(pos) / min(pos) > 100:
             ax.set_yscale("log")
         ax.set_ylabel(f"{metric} ({r.get('unit', 'dimensionless')})")
-        ax.set_xlabel("scheme (red: the run failed)")
+        ax.set_xlabel(r.get("x_label", "scheme (red: the run failed)"))
         for j in judges(claim):
             for key, colour in (("min", "g"), ("max", "r")):
                 lim = j.get(key)
@@ -298,6 +298,49 @@ def plot_claim(claim: dict, figures: dict, png: Path) -> None:
     fig.tight_layout()
     fig.savefig(png, dpi=110)
     plt.close(fig)
+
+
+def plot_test_series(claim: dict, log: str, png: Path) -> bool:
+    """A test-backed convergence claim's error against resolution, read from the test's printed
+    lists (`[claim.test.series]`: `n`, a regex whose group is the comma-separated resolutions;
+    `schemes`, {label: regex of that scheme's errors}; `metric`, `unit`, `order`: the paper's
+    order drawn through the first scheme's coarsest point). False when a list is missing."""
+    ts = claim["test"]["series"]
+
+    def numbers(pattern: str) -> list[float] | None:
+        m = re.search(pattern, log)
+        return [float(v) for v in m.group(1).split(",")] if m else None
+
+    ns = numbers(ts["n"])
+    figures = {}
+    for label, pattern in ts["schemes"].items():
+        errs = numbers(pattern)
+        if not ns or not errs or len(errs) != len(ns):
+            return False
+        figures[label] = {f"{n:g}": e for n, e in zip(ns, errs)}
+    shown = {
+        **claim,
+        "run": {"metric": ts["metric"], "unit": ts.get("unit", "dimensionless"), "resolutions": [{"n": n} for n in ns],
+                "n_label": ts.get("n_label", "N (particles per dimension)")},
+        "judge": {"kind": "order", "scheme": next(iter(ts["schemes"])), "min": ts["order"]},
+    }
+    plot_claim(shown, figures, png)
+    return True
+
+
+def plot_test_bars(claim: dict, log: str, figure: str, png: Path) -> bool:
+    """A test-backed claim's figures as bars, read from the row's figure line, or from the
+    whole test output when `source = "log"` (`[claim.test.bars]`: `pattern`, a regex with
+    groups `label` and `value`, every match one bar; `metric` and `unit` name the axis).
+    False when nothing matches."""
+    tb = claim["test"]["bars"]
+    text = log if tb.get("source") == "log" else figure
+    figures = {m.group("label").strip(): {"": float(m.group("value"))} for m in re.finditer(tb["pattern"], text)}
+    if not figures:
+        return False
+    shown = {"metric": tb["metric"], "unit": tb.get("unit", "dimensionless"), "x_label": tb.get("x_label", "variant")}
+    plot_claim({**claim, "run": shown, "judge": []}, figures, png)
+    return True
 
 
 # ----------------------------------------------------------------------------- suite
@@ -435,6 +478,9 @@ def main() -> int:
             )
             (work / "tests").mkdir(parents=True, exist_ok=True)
             (work / "tests" / f"{c['id']}.log").write_text(log)
+            png = out / f"{c['id']}.png"
+            if ("series" in t and plot_test_series(c, log, png)) or ("bars" in t and plot_test_bars(c, log, figure, png)):
+                row["png"] = png.name
         else:
             figures: dict[str, dict[str, float | str]] = {}
             seconds: dict[str, dict[str, float]] = {}
