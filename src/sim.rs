@@ -467,8 +467,8 @@ impl<const D: usize> Simulation<D> {
         d
     }
 
-    /// The header ([`Self::diagnostics_header`]) with the totals of `block` over the owned
-    /// particles, summed in fixed blocks ([`crate::threads::block_reduce`]: in parallel, and
+    /// Time, step and particle count, with the totals of `block` over the owned particles,
+    /// summed in fixed blocks ([`crate::threads::block_reduce`]: in parallel, and
     /// the same bits on any thread count).
     fn totals(&self, block: impl Fn(std::ops::Range<usize>) -> Diagnostics + Sync) -> Diagnostics {
         let t = crate::threads::block_reduce(
@@ -490,30 +490,14 @@ impl<const D: usize> Simulation<D> {
             },
             Diagnostics::default(),
         );
-        let header = self.diagnostics_header();
-        Diagnostics {
-            max_lorentz: header.max_lorentz.max(t.max_lorentz),
-            fluid_particles: t.fluid_particles,
-            mass: t.mass,
-            momentum: t.momentum,
-            angular_momentum: t.angular_momentum,
-            kinetic_energy: t.kinetic_energy,
-            internal_energy: t.internal_energy,
-            potential_energy: t.potential_energy,
-            total_energy: t.total_energy,
-            ..header
-        }
-    }
-
-    /// Time, step and counts of [`Diagnostics`], every total zero, the Lorentz factor 1.
-    fn diagnostics_header(&self) -> Diagnostics {
         Diagnostics {
             time: self.time,
             step: self.steps,
             dt: self.last_dt,
             particles: self.sys.owned(),
-            max_lorentz: 1.0,
-            ..Default::default()
+            // 1 in Newtonian runs (their blocks leave it 0)
+            max_lorentz: t.max_lorentz.max(1.0),
+            ..t
         }
     }
 
