@@ -110,9 +110,9 @@ def displacement(run, args) -> float:
     with the minimum image over a periodic box of side ``period`` (the hydrostatic square:
     Rosswog §7.3 reads the mean, CRKSPH §4.2 "square preserved", the largest)."""
     snaps = snapshots(run.dir)
-    a, b = read_csv(snaps[0][1]), read_csv(snaps[-1][1])
     if len(snaps) < 2 or snaps[-1][0] <= snaps[0][0]:
         raise ValueError("needs a snapshot at t = 0 and a later one")
+    a, b = read_csv(snaps[0][1]), read_csv(snaps[-1][1])
     ia, ib = np.argsort(a["id"]), np.argsort(b["id"])
     if not np.array_equal(a["id"][ia], b["id"][ib]):
         raise ValueError("the particles of the first and last snapshot differ")
