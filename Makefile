@@ -100,7 +100,7 @@ bench: build fmu venv
 	OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun --oversubscribe -n 2 \
 	  $(BIN) bench --sizes 1000000 --dims 3 --steps 5 --threads 1 --json target/bench-mpi.json
 	$(VPY) tools/bench_zenoh.py --json target/bench-zenoh.json
-	tools/bench_peer.sh
+	tools/bench_peer.sh --rounds 3
 	$(VPY) tools/bench_goals.py
 
 # Side-by-side with PySPH on the 2D Noh problem (installs PySPH into target/peer-venv).

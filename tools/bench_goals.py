@@ -168,6 +168,12 @@ def mpi_goals(g, table, mpi):
           f"in exchanges, halo/owned {two['halo_per_owned']:.2f}")
 
 
+def rounds_text(a, b):
+    """How many interleaved rounds each side's median is of (tools/bench_peer.py --rounds)."""
+    na, nb = len(a.get("rates", [0])), len(b.get("rates", [0]))
+    return "" if na == nb == 1 else f", medians of {na} and {nb} rounds"
+
+
 def peer_goals(g, peer):
     aims = [("standard", "psph", 20.0, "our standard SPH / PySPH PSPH"),
             ("psph", "psph", 10.0, "our PSPH / PySPH PSPH"),
@@ -186,7 +192,8 @@ def peer_goals(g, peer):
             continue
         a, b = mine[ours]["updates_per_s"], peers[theirs]["updates_per_s"]
         g.add(f"Noh 2D: {what}", f"{a / b:.1f}x ({a:.2e} / {b:.2e} particle-updates/s)",
-              f"{peers[theirs]['code']} in the same run, {peers[theirs]['threads']} threads",
+              f"{peers[theirs]['code']} in the same run, {peers[theirs]['threads']} threads"
+              + rounds_text(mine[ours], peers[theirs]),
               f">= {aim:.0f}x", a / b >= aim)
 
 

@@ -3,17 +3,20 @@
 # t = 0.6), both codes in this one run on this machine. Installs PySPH 1.0b2 from PyPI into
 # target/peer-venv the first time (about 3.5 minutes: PySPH's sdist compiles its Cython;
 # https://pypi.org/project/PySPH/1.0b2/).
-# Usage: tools/bench_peer.sh [--threads N] [--schemes psph,crksph]
-#   (default: all cores for both codes; PySPH's psph and crksph schemes — crksph takes ~7 min)
+# Usage: tools/bench_peer.sh [--threads N] [--schemes psph,crksph] [--rounds N]
+#   (default: all cores for both codes; PySPH's psph and crksph schemes — crksph takes ~7 min;
+#   --rounds N runs everything N times interleaved and reports medians, PySPH's crksph once)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 THREADS=$(nproc)
 SCHEMES=psph,crksph
+ROUNDS=1
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --threads) THREADS=$2; shift 2 ;;
     --schemes) SCHEMES=$2; shift 2 ;;
-    *) echo "bench_peer.sh: unknown argument $1 (allowed: --threads N, --schemes LIST)" >&2; exit 2 ;;
+    --rounds) ROUNDS=$2; shift 2 ;;
+    *) echo "bench_peer.sh: unknown argument $1 (allowed: --threads N, --schemes LIST, --rounds N)" >&2; exit 2 ;;
   esac
 done
 VENV=target/peer-venv
@@ -26,4 +29,4 @@ if [[ ! -f $VENV/.installed ]]; then
   touch $VENV/.installed
 fi
 cargo build --release --workspace --features sphfmu/mpi --quiet
-exec $VENV/bin/python tools/bench_peer.py --threads "$THREADS" --schemes "$SCHEMES"
+exec $VENV/bin/python tools/bench_peer.py --threads "$THREADS" --schemes "$SCHEMES" --rounds "$ROUNDS"
