@@ -58,14 +58,7 @@ impl NeighbourList {
             self.total_pairs(),
             "one slot per listed pair"
         );
-        let mut rows = Vec::with_capacity(self.offsets.len().saturating_sub(1));
-        let mut rest = per_pair;
-        for w in self.offsets.windows(2) {
-            let (head, tail) = rest.split_at_mut(w[1] - w[0]);
-            rows.push(head);
-            rest = tail;
-        }
-        rows
+        split_lengths(per_pair, self.offsets.windows(2).map(|w| w[1] - w[0]))
     }
 
     /// Whether these lists (from a saved state) fit `n` particles: empty (built anew by the
@@ -180,14 +173,11 @@ impl NeighbourList {
             offsets[a + 1] += offsets[a];
         }
         let mut entries = vec![0u32; offsets[n]];
-        let mut slices = Vec::with_capacity(parts.len());
-        let mut rest = &mut entries[..];
-        for chunk in 0..parts.len() {
-            let (start, end) = (chunk * CHUNK, ((chunk + 1) * CHUNK).min(n));
-            let (slice, tail) = rest.split_at_mut(offsets[end] - offsets[start]);
-            slices.push(slice);
-            rest = tail;
-        }
+        let slices = split_lengths(
+            &mut entries,
+            (0..parts.len())
+                .map(|chunk| offsets[((chunk + 1) * CHUNK).min(n)] - offsets[chunk * CHUNK]),
+        );
         parts
             .par_iter()
             .zip(slices)
@@ -217,15 +207,9 @@ impl NeighbourList {
     /// a looked-up key (on 128k particles with 79 entries each, 2 threads: 0.097 s, as
     /// much as the build itself).
     pub fn sort_rows_by_id(&mut self, id: &[u32]) {
-        let offsets = &self.offsets;
-        let mut rows: Vec<&mut [u32]> = Vec::with_capacity(offsets.len().saturating_sub(1));
-        let mut rest = self.entries.as_mut_slice();
-        for w in offsets.windows(2) {
-            let (row, tail) = rest.split_at_mut(w[1] - w[0]);
-            rows.push(row);
-            rest = tail;
-        }
-        rows.into_par_iter()
+        let lengths = self.offsets.windows(2).map(|w| w[1] - w[0]);
+        split_lengths(&mut self.entries, lengths)
+            .into_par_iter()
             .with_min_len(64)
             .for_each_init(Vec::<u64>::new, |keys, row| {
                 keys.clear();
@@ -298,19 +282,25 @@ impl NeighbourList {
         // each part's entries copied into its own slice of the array, in parallel (joined
         // on one thread, the copy was a serial stretch of every step's cut)
         let mut entries = vec![0u32; offsets[n]];
-        let mut slices = Vec::with_capacity(parts.len());
-        let mut rest = &mut entries[..];
-        for (_, out) in &parts {
-            let (slice, tail) = rest.split_at_mut(out.len());
-            slices.push(slice);
-            rest = tail;
-        }
+        let slices = split_lengths(&mut entries, parts.iter().map(|(_, out)| out.len()));
         parts
             .par_iter()
             .zip(slices)
             .for_each(|((_, out), slice)| slice.copy_from_slice(out));
         Self { offsets, entries }
     }
+}
+
+/// `slice` cut into consecutive pieces of the given lengths (the rows of a list, a chunk's
+/// rows), so that each can be written by its own task.
+fn split_lengths<T>(mut slice: &mut [T], lengths: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
+    let mut pieces = Vec::with_capacity(lengths.size_hint().0);
+    for len in lengths {
+        let (piece, rest) = std::mem::take(&mut slice).split_at_mut(len);
+        pieces.push(piece);
+        slice = rest;
+    }
+    pieces
 }
 
 /// The inverse of the renumbering "new index i = old index `perm[i]`": old index → new.
