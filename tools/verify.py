@@ -60,6 +60,8 @@ class Run:
     error: str | None = None
     seconds: float = 0.0
     kernel_table: dict = field(default_factory=dict)
+    # taken finished from an earlier, interrupted invocation (`--reuse`)
+    reused: bool = False
 
     def command(self, threads: int) -> list[str]:
         cmd = [str(BIN), "run", self.model, "--out", str(self.dir), "--quiet", "--threads", str(threads)]
@@ -115,7 +117,7 @@ def execute(run: Run, threads: int, reuse: bool = False) -> Run:
     done = run.dir / "command.json"
     old = json.loads(done.read_text()) if reuse and done.exists() else {}
     if old.get("command") == record["command"] and old.get("binary_mtime") == record["binary_mtime"]:
-        run.seconds, run.error = old["seconds"], old.get("error")
+        run.seconds, run.error, run.reused = old["seconds"], old.get("error"), True
         if not run.error:
             run.summary = json.loads((run.dir / "summary.json").read_text())
         return run
@@ -391,6 +393,34 @@ def expand(claim: dict, work: Path) -> list[tuple[str, str, Run, dict]]:
     return out
 
 
+def expected_seconds(plan: dict, record: Path) -> dict[Path, float]:
+    """What each run is expected to take, to start the longest first: its own time when its
+    directory holds a finished run (any binary), else its claim's cost in the last report
+    shared evenly among the claim's runs. Runs with neither come last."""
+    out: dict[Path, float] = {}
+    costs: dict[str, float] = {}
+    try:
+        rows = json.loads(record.read_text())
+    except (OSError, ValueError):
+        rows = []
+    for r in rows:
+        try:
+            costs[r["id"]] = float(str(r["cost"]).split()[0])
+        except (ValueError, IndexError, KeyError):
+            pass  # out of reach, or not yet measured
+    for cid, entries in plan.items():
+        dirs = {run.dir for _, _, run, _ in entries}
+        share = costs.get(cid, 0.0) / max(1, len(dirs))
+        for d in dirs:
+            out[d] = max(out.get(d, 0.0), share)
+    for d in list(out):
+        try:
+            out[d] = float(json.loads((d / "command.json").read_text())["seconds"])
+        except (OSError, ValueError, KeyError):
+            pass
+    return out
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--suite", default="models/verify/suite.toml")
@@ -422,7 +452,7 @@ def main() -> int:
         meta = json.loads((out / "meta.json").read_text())
         # the header describes the run that last measured, partial or full
         last = meta.get("last", {"seconds": meta["seconds"], "only": None})
-        write_report(out / "README.md", rows, last["only"], float(last["seconds"]))
+        write_report(out / "README.md", rows, last["only"], float(last["seconds"]), last.get("work", ""))
         return 0
     if not BIN.exists():
         print(f"verify: {BIN} is missing; run `make build` first", file=sys.stderr)
@@ -441,6 +471,10 @@ def main() -> int:
     cores = os.cpu_count() or 1
     threads = max(1, cores // a.jobs)
     todo = [r for r in runs.values() if not r.is_kernel_table()]
+    # longest first (LPT): with the runs in claim order the last hour-long runs started late
+    # and ran alone at the end
+    expected = expected_seconds(plan, out / "rows.json")
+    todo.sort(key=lambda r: -expected.get(r.dir, 0.0))
     print(f"verify: {len(claims)} claims, {len(todo)} runs, {a.jobs} at once with {threads} threads each")
     done = 0
     with cf.ThreadPoolExecutor(max_workers=a.jobs) as pool:
@@ -552,14 +586,21 @@ def main() -> int:
         rows = refresh_texts([merged[i] for i in order if i in merged], suite)
     record.write_text(json.dumps(rows, indent=1, default=str) + "\n")
     elapsed = time.time() - t_start
-    write_report(out / "README.md", rows, a.only, elapsed)
+    # with --reuse the wall clock covers only this invocation: say so, with the sum of the runs'
+    # own times (each on `threads` threads) as the measure of the whole suite's work
+    measured = [r for r in runs.values() if not r.is_kernel_table()]
+    work_note = (f"{sum(r.reused for r in measured)} of {len(measured)} runs were finished by an earlier, "
+                 f"interrupted invocation with the same binary (`--reuse`); all {len(measured)} runs "
+                 f"took {sum(r.seconds for r in measured) / 3600:.1f} h together, {a.jobs} at once"
+                 if any(r.reused for r in measured) else "")
+    write_report(out / "README.md", rows, a.only, elapsed, work_note)
     # "seconds": the last full run's wall time; "last": the run the header describes, which
     # --report-only repeats
     meta_path = out / "meta.json"
     meta = json.loads(meta_path.read_text()) if meta_path.exists() else {}
     if not a.only:
         meta["seconds"] = elapsed
-    meta["last"] = {"seconds": elapsed, "only": a.only}
+    meta["last"] = {"seconds": elapsed, "only": a.only, "work": work_note}
     meta_path.write_text(json.dumps(meta) + "\n")
     print(f"verify: report {out / 'README.md'} ({time.time() - t_start:.0f} s)")
     return 0
@@ -590,7 +631,7 @@ def fmt(v) -> str:
     return f"{v:.3g}"
 
 
-def write_report(path: Path, rows: list[dict], only: str | None, seconds: float) -> None:
+def write_report(path: Path, rows: list[dict], only: str | None, seconds: float, work_note: str = "") -> None:
     cpu = ""
     try:
         cpu = next(l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name"))
@@ -606,6 +647,7 @@ def write_report(path: Path, rows: list[dict], only: str | None, seconds: float)
         "do not edit by hand, rerun it. Every figure below comes from the command in its row.",
         f"Machine: {cpu}, {os.cpu_count()} cores. Wall time of this run: {seconds / 60:.1f} min"
         + (f" (re-measured: {only}; the other rows are from the last full run, kept in rows.json)" if only else "")
+        + (f" ({work_note})" if work_note else "")
         + ". The cost column is each claim's own run time.",
         "",
         "Verdicts: " + ", ".join(f"{v} {n}" for v, n in sorted(counts.items())) + ".",
