@@ -14,7 +14,7 @@
 //! terms are now computed for the dropped third of the entries too. The plain cut
 //! ([`NoVisit`]) also fills v_ab and m_b, which only a visitor reads.
 
-use super::lanes::{fill_pair, padded, Wide, Width, LANES};
+use super::lanes::{fill_pair, finish_pairs, padded, Wide, Width, LANES};
 use super::{unpack, NeighbourList};
 use crate::particles::Vector;
 use crate::system::System;
@@ -166,12 +166,12 @@ impl<const D: usize, V: CutVisitor<D>> Wide for CutRows<'_, D, V> {
                 for (i, &e) in entries.iter().enumerate() {
                     let (b, code) = unpack(e);
                     let rb = &self.recs[b];
-                    let pair = ((&ra.x, &ra.v), (&rb.x, &rb.v));
-                    fill_pair(dom, pair.0, pair.1, code, &mut blk.dx, &mut blk.vab, i);
+                    fill_pair(dom, (&rb.x, &rb.v), code, &mut blk.dx, &mut blk.vab, i);
                     reach[i] = rb.reach;
                     blk.m[i] = rb.m;
                     wall[i] = rb.wall;
                 }
+                finish_pairs(dom, (&ra.x, &ra.v), &mut blk.dx, &mut blk.vab, n);
                 for i in 0..lanes {
                     let mut r2 = 0.0;
                     for k in 0..D {

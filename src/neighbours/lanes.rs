@@ -56,27 +56,53 @@ pub fn inverse_h(h: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// The geometry lanes of one pair: x_a − image(x_b) into `dx[..][i]` and v_a − image(v_b) into
-/// `vab[..][i]` (components past D left alone), through the domain's image `code`; returns
-/// image(v_b).
+/// The fill's half of one pair's geometry lanes: image(x_b) into `dx[..][i]` and image(v_b)
+/// into `vab[..][i]` (components past D left alone), through the domain's image `code` (a
+/// mirror, which branches); returns image(v_b). [`finish_pairs`] turns a block of these into
+/// separations once the block is filled.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 pub fn fill_pair<const D: usize>(
     dom: &Domain<D>,
-    (xa, va): (&Vector<D>, &Vector<D>),
     (xb, vb): (&Vector<D>, &Vector<D>),
     code: ImageCode,
     dx: &mut [[f64; LANES]; 3],
     vab: &mut [[f64; LANES]; 3],
     i: usize,
 ) -> Vector<D> {
-    let d = dom.separation(xa, xb, code);
-    let vb = dom.image_velocity(vb, code);
+    let (y, w) = if code == 0 {
+        (*xb, *vb)
+    } else {
+        (dom.image_position(xb, code), dom.image_velocity(vb, code))
+    };
     for k in 0..D {
-        dx[k][i] = d[k];
-        vab[k][i] = va[k] - vb[k];
+        dx[k][i] = y[k];
+        vab[k][i] = w[k];
     }
-    vb
+    w
+}
+
+/// The first `n` lanes filled by [`fill_pair`] made into x_a − image(x_b), minimum image on
+/// periodic axes, and v_a − image(v_b): loops over lanes, which the compiler makes SIMD. The
+/// wrap is [`Domain::separation`]'s to the bit (see [`crate::domain::MinimumImage`]). Taken one
+/// pair at a time inside the fill, `separation`'s reloads and branches were 18 % of the 3D
+/// Sod's instructions (callgrind, BENCHMARKS.md, 2026-12-07).
+#[inline(always)]
+pub fn finish_pairs<const D: usize>(
+    dom: &Domain<D>,
+    (xa, va): (&Vector<D>, &Vector<D>),
+    dx: &mut [[f64; LANES]; 3],
+    vab: &mut [[f64; LANES]; 3],
+    n: usize,
+) {
+    let wrap = dom.minimum_image();
+    for k in 0..D {
+        for d in dx[k][..n].iter_mut() {
+            *d = wrap.wrap(k, xa[k] - *d);
+        }
+        for w in vab[k][..n].iter_mut() {
+            *w = va[k] - *w;
+        }
+    }
 }
 
 /// A pass over neighbour rows written on blocks of lanes (see the module comment).

@@ -5,7 +5,7 @@
 use super::momentum::{corrected_gradient, Coef};
 use super::pair_kernels::PairKernel;
 use super::reproducing::RkCoefficients;
-use crate::neighbours::lanes::{fill_pair, for_each_row, padded, RowPass, LANES};
+use crate::neighbours::lanes::{fill_pair, finish_pairs, for_each_row, padded, RowPass, LANES};
 use crate::neighbours::unpack;
 use crate::system::System;
 use nalgebra::SMatrix;
@@ -70,7 +70,6 @@ impl<const D: usize> RowPass for Rows<'_, D> {
                 let (b, code) = unpack(e);
                 fill_pair(
                     dom,
-                    (&p.pos[a], &p.vel[a]),
                     (&p.pos[b], &p.vel[b]),
                     code,
                     &mut blk.dx,
@@ -81,6 +80,7 @@ impl<const D: usize> RowPass for Rows<'_, D> {
                 blk.g[i] = kern[i].g;
                 blk.vol[i] = self.vol[b];
             }
+            finish_pairs(dom, (&p.pos[a], &p.vel[a]), &mut blk.dx, &mut blk.vab, n);
             let lanes = padded(n);
             for i in 0..lanes {
                 let mut x = [0.0; 3];

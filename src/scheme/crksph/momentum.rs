@@ -21,7 +21,7 @@ use super::pair_kernels::PairKernel;
 use super::reproducing::RkCoefficients;
 use super::viscosity::ViscosityParams;
 use crate::kernel::SUPPORT;
-use crate::neighbours::lanes::{fill_pair, for_each_row, padded, RowPass, LANES};
+use crate::neighbours::lanes::{fill_pair, finish_pairs, for_each_row, padded, RowPass, LANES};
 use crate::neighbours::unpack;
 use crate::particles::Vector;
 use crate::scheme::rosswog::gradients::reflect;
@@ -233,15 +233,7 @@ impl<'s, const D: usize> RowPass for Rows<'_, 's, D> {
             for (i, &e) in block.iter().enumerate() {
                 let (b, code) = unpack(e);
                 let rb = &self.recs[b];
-                fill_pair(
-                    dom,
-                    (&ra.x, &ra.v),
-                    (&rb.x, &rb.v),
-                    code,
-                    &mut blk.dx,
-                    &mut blk.vab,
-                    i,
-                );
+                fill_pair(dom, (&rb.x, &rb.v), code, &mut blk.dx, &mut blk.vab, i);
                 blk.w[i] = kern[i].w;
                 blk.g[i] = kern[i].g;
                 blk.hinv[i] = rb.hinv;
@@ -265,6 +257,7 @@ impl<'s, const D: usize> RowPass for Rows<'_, 's, D> {
                     }
                 }
             }
+            finish_pairs(dom, (&ra.x, &ra.v), &mut blk.dx, &mut blk.vab, n);
             let lanes = padded(n);
             for i in n..lanes {
                 blk.skip[i] = 1.0;

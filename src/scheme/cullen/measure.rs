@@ -8,7 +8,7 @@
 //! passes took 1.73 s as gathers with a closure per pair.
 
 use crate::kernel::{DimKernel, Kernel};
-use crate::neighbours::lanes::{fill_pair, pad_separations, padded, RowPass, LANES};
+use crate::neighbours::lanes::{fill_pair, finish_pairs, pad_separations, padded, RowPass, LANES};
 use crate::neighbours::unpack;
 use crate::particles::Vector;
 use crate::system::System;
@@ -80,11 +80,11 @@ impl<const D: usize, K: Kernel + Copy> RowPass for GradientRows<'_, D, K> {
             for (i, &e) in block.iter().enumerate() {
                 let (b, code) = unpack(e);
                 let rb = &self.recs[b];
-                let pair = ((&ra.x, &ra.v), (&rb.x, &rb.v));
-                fill_pair(dom, pair.0, pair.1, code, &mut blk.dx, &mut blk.vab, i);
+                fill_pair(dom, (&rb.x, &rb.v), code, &mut blk.dx, &mut blk.vab, i);
                 blk.m[i] = rb.m;
                 blk.c[i] = rb.c;
             }
+            finish_pairs(dom, (&ra.x, &ra.v), &mut blk.dx, &mut blk.vab, n);
             let lanes = pad_separations::<D>(&mut blk.dx, n);
             for i in 0..lanes {
                 let mut r2 = 0.0;

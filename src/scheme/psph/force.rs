@@ -14,7 +14,9 @@
 use super::super::crksph::viscosity::ViscosityParams;
 use super::super::paper_step::{PairRow, PairSums};
 use crate::kernel::{DimKernel, Kernel, KernelVisitor, SUPPORT};
-use crate::neighbours::lanes::{fill_pair, for_each_row, pad_separations, RowPass, LANES};
+use crate::neighbours::lanes::{
+    fill_pair, finish_pairs, for_each_row, pad_separations, RowPass, LANES,
+};
 use crate::neighbours::unpack;
 use crate::particles::Vector;
 use crate::system::System;
@@ -174,15 +176,7 @@ impl<'s, const D: usize, K: Kernel + Copy> RowPass for Rows<'_, 's, D, K> {
             for (i, &e) in block.iter().enumerate() {
                 let (b, code) = unpack(e);
                 let rb = &recs[b];
-                fill_pair(
-                    dom,
-                    (&ra.x, &ra.v),
-                    (&rb.x, &rb.v),
-                    code,
-                    &mut blk.dx,
-                    &mut blk.vab,
-                    i,
-                );
+                fill_pair(dom, (&rb.x, &rb.v), code, &mut blk.dx, &mut blk.vab, i);
                 blk.hinv[i] = rb.hinv;
                 blk.m[i] = rb.m;
                 blk.mu_inv[i] = rb.mu_inv;
@@ -195,6 +189,7 @@ impl<'s, const D: usize, K: Kernel + Copy> RowPass for Rows<'_, 's, D, K> {
                 blk.alpha[i] = rb.alpha;
                 blk.walls[i] = if ra.wall && rb.wall { 1.0 } else { 0.0 };
             }
+            finish_pairs(dom, (&ra.x, &ra.v), &mut blk.dx, &mut blk.vab, n);
             let lanes = pad_separations::<D>(&mut blk.dx, n);
             self.terms(ra, blk, t, lanes);
             // Sum in list order; keep each a_ij.

@@ -10,7 +10,9 @@
 
 use super::StandardParams;
 use crate::kernel::{DimKernel, Kernel, KernelVisitor};
-use crate::neighbours::lanes::{fill_pair, for_each_row, pad_separations, RowPass, LANES};
+use crate::neighbours::lanes::{
+    fill_pair, finish_pairs, for_each_row, pad_separations, RowPass, LANES,
+};
 use crate::neighbours::unpack;
 use crate::particles::Vector;
 use crate::system::System;
@@ -264,8 +266,7 @@ impl<const D: usize, K: Kernel + Copy, const PLAIN: bool> RowPass for ForceRows<
             for (i, &e) in entries.iter().enumerate() {
                 let (b, code) = unpack(e);
                 let rb = &recs[b];
-                let pair = ((&ra.x, &ra.v), (&rb.x, &rb.v));
-                let vb = fill_pair(dom, pair.0, pair.1, code, &mut blk.dx, &mut blk.vab, i);
+                let vb = fill_pair(dom, (&rb.x, &rb.v), code, &mut blk.dx, &mut blk.vab, i);
                 blk.hinv[i] = rb.hinv;
                 blk.m[i] = rb.m;
                 blk.pstd[i] = rb.pstd;
@@ -285,6 +286,7 @@ impl<const D: usize, K: Kernel + Copy, const PLAIN: bool> RowPass for ForceRows<
                     blk.wall[i] = if ra.wall || rb.wall { 1.0 } else { 0.0 };
                 }
             }
+            finish_pairs(dom, (&ra.x, &ra.v), &mut blk.dx, &mut blk.vab, n);
             let lanes = pad_separations::<D>(&mut blk.dx, n);
             self.terms(ra, standard_here, blk, t, lanes);
             // Sum in list order.
