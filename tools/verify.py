@@ -429,7 +429,7 @@ def main() -> int:
     ap.add_argument("--jobs", type=int, default=1, help="runs at once (each gets cores/jobs threads)")
     ap.add_argument("--only", default="", help="comma-separated claim ids")
     ap.add_argument("--report-only", action="store_true",
-                    help="rewrite README.md from rows.json and the suite's current texts, measuring nothing")
+                    help="rewrite README.md and rows.json from rows.json's figures and the suite's current texts and judges, measuring nothing")
     ap.add_argument("--reuse", action="store_true",
                     help="keep finished runs made by the same command and binary (after an interruption)")
     a = ap.parse_args()
@@ -449,6 +449,7 @@ def main() -> int:
     work, out = ROOT / a.work, ROOT / a.out
     if a.report_only:
         rows = refresh_texts(json.loads((out / "rows.json").read_text()), suite)
+        (out / "rows.json").write_text(json.dumps(rows, indent=1, default=str) + "\n")
         meta = json.loads((out / "meta.json").read_text())
         # the header describes the run that last measured, partial or full
         last = meta.get("last", {"seconds": meta["seconds"], "only": None})
@@ -616,7 +617,12 @@ def refresh_texts(rows: list[dict], suite: dict) -> list[dict]:
             for k in ("claim", "paper_value", "note", "reduced"):
                 r[k] = texts[r["id"]].get(k, "")
         if "run" in texts.get(r["id"], {}):
-            r["ideal"] = texts[r["id"]]["run"].get("ideal")
+            c = texts[r["id"]]
+            r["ideal"] = c["run"].get("ideal")
+            # judging is a function of the stored figures, so a judge changed in the suite
+            # takes effect without a rerun; the cost judge also reads run times, not stored
+            if r.get("figures") and not any(j["kind"] == "cost" for j in judges(c)):
+                r["verdict"], r["ours"] = judge(c, r["figures"]) if judges(c) else ("measured", "")
     return rows
 
 

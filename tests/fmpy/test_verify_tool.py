@@ -159,3 +159,79 @@ metric = "m2"
         assert "run.from = 'c' names no claim" in str(e)
     else:
         raise AssertionError("an unknown run.from must be refused")
+
+
+def test_report_only_judges_stored_figures_by_the_suites_current_judge(tmp_path):
+    """A judge added or changed in the suite applies to the figures rows.json keeps, without a
+    rerun: a row measured without a judge gets its verdict, and one the new bound fails is
+    not reproduced."""
+    suite = tmp_path / "suite.toml"
+    suite.write_text("""[[claim]]
+id = "pass"
+paper = "crksph"
+number = "1"
+claim = "F4 dissipates more"
+paper_value = "more"
+[claim.run]
+model = "m.toml"
+schemes = ["f1", "f4"]
+metric = "l1"
+[claim.judge]
+kind = "ratio"
+schemes = ["f4", "f1"]
+min = 1.2
+
+[[claim]]
+id = "fail"
+paper = "crksph"
+number = "2"
+claim = "F4 dissipates much more"
+paper_value = "much more"
+[claim.run]
+model = "m.toml"
+schemes = ["f1", "f4"]
+metric = "l1"
+[claim.judge]
+kind = "ratio"
+schemes = ["f4", "f1"]
+min = 3.0
+""")
+    out = tmp_path / "docs"
+    out.mkdir()
+    figures = {"f1": {"": 0.01}, "f4": {"": 0.02}}
+    rows = [{"id": i, "paper": "crksph", "number": n, "claim": "", "paper_value": "", "note": "",
+             "reduced": "", "verdict": "measured", "ours": "", "command": "", "cost": "1 s",
+             "figures": figures, "metric": "l1"} for i, n in (("pass", "1"), ("fail", "2"))]
+    (out / "rows.json").write_text(verify.json.dumps(rows))
+    (out / "meta.json").write_text('{"seconds": 60}\n')
+    argv = sys.argv
+    sys.argv = ["verify.py", "--report-only", "--suite", str(suite), "--out", str(out)]
+    try:
+        assert verify.main() == 0
+    finally:
+        sys.argv = argv
+    got = {r["id"]: r for r in verify.json.loads((out / "rows.json").read_text())}
+    assert got["pass"]["verdict"] == "reproduced", got["pass"]
+    assert got["fail"]["verdict"] == "not reproduced", got["fail"]
+    assert "= 2" in got["pass"]["ours"], got["pass"]["ours"]
+    assert "**not reproduced**" in (out / "README.md").read_text()
+
+
+def test_runs_start_longest_first_by_their_last_cost(tmp_path):
+    """The runner's order: a run's own recorded time when its folder has one, else its claim's
+    last cost shared among the claim's runs."""
+    claims = [
+        {"id": "cheap", "run": {"model": "a.toml", "schemes": ["s1", "s2"], "metric": "m"}},
+        {"id": "dear", "run": {"model": "b.toml", "schemes": ["s1", "s2"], "metric": "m"}},
+    ]
+    plan = {c["id"]: verify.expand(c, tmp_path) for c in claims}
+    record = tmp_path / "rows.json"
+    record.write_text(verify.json.dumps([{"id": "cheap", "cost": "10 s"}, {"id": "dear", "cost": "1000 s"},
+                                         {"id": "out", "cost": ""}]))
+    timed = plan["cheap"][1][2].dir
+    timed.mkdir(parents=True)
+    (timed / "command.json").write_text('{"seconds": 2000.0}')
+    expected = verify.expected_seconds(plan, record)
+    assert expected[plan["dear"][0][2].dir] == 500.0
+    assert expected[plan["cheap"][0][2].dir] == 5.0
+    assert expected[timed] == 2000.0
