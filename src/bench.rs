@@ -140,16 +140,19 @@ pub fn run_one<const D: usize>(
     })
 }
 
+/// Every size in every dimension; `(steps, min_updates)`: a size of n particles runs
+/// max(steps, ⌈min_updates/n⌉) steps.
 pub fn run_table(
     sizes: &[usize],
     dims: &[usize],
-    steps: u64,
+    (at_least, min_updates): (u64, u64),
     kernel: &str,
     ranks: Option<Arc<dyn Comm>>,
 ) -> Result<Vec<BenchRow>, String> {
     let mut rows = Vec::new();
     for &d in dims {
         for &n in sizes {
+            let steps = at_least.max(min_updates.div_ceil(n.max(1) as u64));
             let row = match d {
                 1 => run_one::<1>(n, steps, kernel, ranks.clone())?,
                 2 => run_one::<2>(n, steps, kernel, ranks.clone())?,
