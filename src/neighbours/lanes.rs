@@ -257,6 +257,51 @@ mod tests {
     }
 
     #[test]
+    fn finished_pairs_are_the_domains_separations_to_the_bit() {
+        use crate::domain::BoundaryKind;
+        // periodic, reflecting and open axes; a near both faces of the periodic axis so that
+        // the wrap acts both ways, and every mirror code of the reflecting axis (0, 3, 6)
+        let dom = Domain::<3> {
+            lo: [0.0, -1.0, 0.0],
+            hi: [1.0, 2.0, 1.0],
+            kind: [
+                BoundaryKind::Periodic,
+                BoundaryKind::Reflect,
+                BoundaryKind::Open,
+            ],
+        };
+        let mut dx = [[0.0; LANES]; 3];
+        let mut vab = [[0.0; LANES]; 3];
+        let mut wrapped = 0;
+        for xa0 in [0.013, 0.5, 0.987] {
+            let xa = Vector::<3>::new(xa0, -0.93, 0.4);
+            let va = Vector::<3>::new(0.3, -1.7, 0.25);
+            let mut want = Vec::new();
+            for k in 0..10 {
+                let t = k as f64;
+                let xb = Vector::<3>::new((0.11 * t + 0.003).fract(), -1.0 + 0.29 * t, 0.1 * t);
+                let vb = Vector::<3>::new(0.7 - 0.1 * t, 0.05 * t, -0.3);
+                for code in [0u8, 3, 6] {
+                    let i = want.len();
+                    let w = fill_pair(&dom, (&xb, &vb), code, &mut dx, &mut vab, i);
+                    assert_eq!(w, dom.image_velocity(&vb, code));
+                    let d = dom.separation(&xa, &xb, code);
+                    wrapped += (d[0] != xa[0] - xb[0]) as usize;
+                    want.push((d, va - w));
+                }
+            }
+            finish_pairs(&dom, (&xa, &va), &mut dx, &mut vab, want.len());
+            for (j, (d, v)) in want.iter().enumerate() {
+                for k in 0..3 {
+                    assert_eq!(dx[k][j].to_bits(), d[k].to_bits(), "pair {j} axis {k}");
+                    assert_eq!(vab[k][j].to_bits(), v[k].to_bits(), "pair {j} axis {k}");
+                }
+            }
+        }
+        assert!(wrapped > 0, "some pairs must wrap across the periodic axis");
+    }
+
+    #[test]
     fn every_width_gives_the_same_bits() {
         let n = 500;
         let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin() * 1.7).collect();
