@@ -166,11 +166,11 @@ def test_report_only_judges_stored_figures_by_the_suites_current_judge(tmp_path)
     rerun: a row measured without a judge gets its verdict, and one the new bound fails is
     not reproduced."""
     suite = tmp_path / "suite.toml"
-    suite.write_text("""[[claim]]
-id = "pass"
+    claim = """[[claim]]
+id = "{id}"
 paper = "crksph"
-number = "1"
-claim = "F4 dissipates more"
+number = "{number}"
+claim = "F4 dissipates at least {bound} times as much"
 paper_value = "more"
 [claim.run]
 model = "m.toml"
@@ -179,23 +179,10 @@ metric = "l1"
 [claim.judge]
 kind = "ratio"
 schemes = ["f4", "f1"]
-min = 1.2
-
-[[claim]]
-id = "fail"
-paper = "crksph"
-number = "2"
-claim = "F4 dissipates much more"
-paper_value = "much more"
-[claim.run]
-model = "m.toml"
-schemes = ["f1", "f4"]
-metric = "l1"
-[claim.judge]
-kind = "ratio"
-schemes = ["f4", "f1"]
-min = 3.0
-""")
+min = {bound}
+"""
+    suite.write_text("\n".join(claim.format(id=i, number=n, bound=b)
+                               for i, n, b in (("pass", "1", 1.2), ("fail", "2", 3.0))))
     out = tmp_path / "docs"
     out.mkdir()
     figures = {"f1": {"": 0.01}, "f4": {"": 0.02}}
