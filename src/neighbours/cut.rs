@@ -179,7 +179,9 @@ impl<const D: usize, V: CutVisitor<D>> Wide for CutRows<'_, D, V> {
                     }
                     let reach = ra.reach.max(reach[i]);
                     blk.r2[i] = r2;
-                    blk.keep[i] = i < n && r2 < reach * reach && !(drop_walls && wall[i]);
+                    // `&`, not `&&`: three lane-wise tests, no branches (callgrind: the
+                    // short-circuit form was 2.3 % of Noh 2D's instructions, this one 1.2 %)
+                    blk.keep[i] = (i < n) & (r2 < reach * reach) & !(drop_walls & wall[i]);
                 }
                 blk.n = n;
                 blk.lanes = lanes;
