@@ -110,6 +110,28 @@ def progress(run_dir: Path) -> str:
         return "with no diagnostics written"
 
 
+def busy_seconds(run_dirs: list[Path]) -> float:
+    """Wall clock during which at least one of these runs was running: the length of the union
+    of their [end − seconds, end] intervals, from each command.json ("finished", else the file's
+    time). Across resumed invocations (`--reuse`) it is the suite's wall time without the gaps
+    between invocations, where one invocation's own clock would cover only its part."""
+    spans = []
+    for d in run_dirs:
+        f = d / "command.json"
+        try:
+            rec = json.loads(f.read_text())
+            end = float(rec.get("finished", f.stat().st_mtime))
+            spans.append((end - float(rec["seconds"]), end))
+        except (OSError, ValueError, KeyError):
+            pass  # never ran, or a record from before "seconds"
+    total, reach = 0.0, -math.inf
+    for start, end in sorted(spans):
+        if end > reach:
+            total += end - max(start, reach)
+            reach = end
+    return total
+
+
 def execute(run: Run, threads: int, reuse: bool = False) -> Run:
     """Run it, or with `reuse` take the finished run in its directory made by the same command
     and the same binary (command.json records both)."""
@@ -130,7 +152,7 @@ def execute(run: Run, threads: int, reuse: bool = False) -> Run:
     except subprocess.TimeoutExpired:
         run.seconds = time.time() - t0
         run.error = f"stopped after {run.seconds:.0f} s (the suite's limit per run), {progress(run.dir)}"
-        done.write_text(json.dumps({**record, "seconds": run.seconds, "error": run.error}))
+        done.write_text(json.dumps({**record, "seconds": run.seconds, "error": run.error, "finished": time.time()}))
         return run
     run.seconds = time.time() - t0
     (run.dir / "log.txt").write_text(p.stdout + p.stderr)
@@ -140,7 +162,7 @@ def execute(run: Run, threads: int, reuse: bool = False) -> Run:
         run.error = f"exit {p.returncode}: {last}"
     else:
         run.summary = json.loads((run.dir / "summary.json").read_text())
-    done.write_text(json.dumps({**record, "seconds": run.seconds, "error": run.error}))
+    done.write_text(json.dumps({**record, "seconds": run.seconds, "error": run.error, "finished": time.time()}))
     return run
 
 
@@ -592,7 +614,9 @@ def main() -> int:
     measured = [r for r in runs.values() if not r.is_kernel_table()]
     work_note = (f"{sum(r.reused for r in measured)} of {len(measured)} runs were finished by an earlier, "
                  f"interrupted invocation with the same binary (`--reuse`); all {len(measured)} runs "
-                 f"took {sum(r.seconds for r in measured) / 3600:.1f} h together, {a.jobs} at once"
+                 f"took {sum(r.seconds for r in measured) / 3600:.1f} h together, {a.jobs} at once, "
+                 f"and kept the machine busy for {busy_seconds(sorted({r.dir for r in measured})) / 3600:.1f} h "
+                 f"of wall clock across the invocations"
                  if any(r.reused for r in measured) else "")
     write_report(out / "README.md", rows, a.only, elapsed, work_note)
     # "seconds": the last full run's wall time; "last": the run the header describes, which

@@ -222,3 +222,26 @@ def test_runs_start_longest_first_by_their_last_cost(tmp_path):
     assert expected[plan["dear"][0][2].dir] == 500.0
     assert expected[plan["cheap"][0][2].dir] == 5.0
     assert expected[timed] == 2000.0
+
+
+def test_busy_wall_clock_is_the_union_of_the_runs_intervals(tmp_path):
+    """The suite's wall time across resumed invocations: overlapping runs count once, the gap
+    between two invocations not at all, and a folder without a record adds nothing. A record
+    without "finished" (written before it existed) ends at its file's time."""
+    def record(name, seconds, finished=None):
+        d = tmp_path / name
+        d.mkdir()
+        rec = {"seconds": seconds} | ({"finished": finished} if finished is not None else {})
+        (d / "command.json").write_text(verify.json.dumps(rec))
+        return d
+
+    # first invocation: [0, 100] and [50, 120] side by side; the second, after a gap: [1000, 1030]
+    dirs = [record("a", 100.0, 100.0), record("b", 70.0, 120.0), record("c", 30.0, 1030.0)]
+    (tmp_path / "never").mkdir()
+    assert verify.busy_seconds(dirs + [tmp_path / "never"]) == 150.0
+    # nested inside another run's interval: nothing more
+    assert verify.busy_seconds(dirs + [record("d", 10.0, 110.0)]) == 150.0
+    old = record("e", 5.0)
+    mtime = old.joinpath("command.json").stat().st_mtime
+    assert abs(verify.busy_seconds([old]) - 5.0) < 1e-9
+    assert abs(verify.busy_seconds([old, record("f", 5.0, mtime - 2.0)]) - 7.0) < 1e-6
