@@ -147,13 +147,18 @@ def execute(run: Run, threads: int, reuse: bool = False) -> Run:
         shutil.rmtree(run.dir)
     run.dir.mkdir(parents=True)
     t0 = time.time()
+
+    def finished() -> Run:
+        # the record --reuse and busy_seconds read
+        done.write_text(json.dumps({**record, "seconds": run.seconds, "error": run.error, "finished": time.time()}))
+        return run
+
     try:
         p = subprocess.run(run.command(threads), cwd=ROOT, capture_output=True, text=True, timeout=MAX_RUN_SECONDS)
     except subprocess.TimeoutExpired:
         run.seconds = time.time() - t0
         run.error = f"stopped after {run.seconds:.0f} s (the suite's limit per run), {progress(run.dir)}"
-        done.write_text(json.dumps({**record, "seconds": run.seconds, "error": run.error, "finished": time.time()}))
-        return run
+        return finished()
     run.seconds = time.time() - t0
     (run.dir / "log.txt").write_text(p.stdout + p.stderr)
     if p.returncode != 0:
@@ -162,8 +167,7 @@ def execute(run: Run, threads: int, reuse: bool = False) -> Run:
         run.error = f"exit {p.returncode}: {last}"
     else:
         run.summary = json.loads((run.dir / "summary.json").read_text())
-    done.write_text(json.dumps({**record, "seconds": run.seconds, "error": run.error, "finished": time.time()}))
-    return run
+    return finished()
 
 
 def execute_test(filt: str, ignored: bool) -> tuple[bool, str, float]:
