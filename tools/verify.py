@@ -26,6 +26,7 @@ import os
 import platform
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -138,7 +139,11 @@ def execute(run: Run, threads: int, reuse: bool = False) -> Run:
     record = {"command": [run.model, run.scheme, list(run.sets)], "binary_mtime": BIN.stat().st_mtime}
     done = run.dir / "command.json"
     old = json.loads(done.read_text()) if reuse and done.exists() else {}
-    if old.get("command") == record["command"] and old.get("binary_mtime") == record["binary_mtime"]:
+    # a run killed by a signal (the session's end, an OOM kill) was interrupted and has no result
+    # to keep; records from before "killed" existed say so as a negative exit status
+    killed = old.get("killed", str(old.get("error") or "").startswith("exit -"))
+    if (old.get("command") == record["command"] and old.get("binary_mtime") == record["binary_mtime"]
+            and not killed):
         run.seconds, run.error, run.reused = old["seconds"], old.get("error"), True
         if not run.error:
             run.summary = json.loads((run.dir / "summary.json").read_text())
@@ -147,10 +152,12 @@ def execute(run: Run, threads: int, reuse: bool = False) -> Run:
         shutil.rmtree(run.dir)
     run.dir.mkdir(parents=True)
     t0 = time.time()
+    killed_by = None
 
     def finished() -> Run:
         # the record --reuse and busy_seconds read
-        done.write_text(json.dumps({**record, "seconds": run.seconds, "error": run.error, "finished": time.time()}))
+        done.write_text(json.dumps({**record, "seconds": run.seconds, "error": run.error, "finished": time.time(),
+                                    "killed": killed_by is not None}))
         return run
 
     try:
@@ -161,7 +168,10 @@ def execute(run: Run, threads: int, reuse: bool = False) -> Run:
         return finished()
     run.seconds = time.time() - t0
     (run.dir / "log.txt").write_text(p.stdout + p.stderr)
-    if p.returncode != 0:
+    if p.returncode < 0:
+        killed_by = signal.Signals(-p.returncode).name
+        run.error = f"killed by {killed_by} after {run.seconds:.0f} s (interrupted: `--reuse` runs it again)"
+    elif p.returncode != 0:
         last = (p.stderr.strip().splitlines() or ["(no message)"])[-1]
         last = re.sub(r"\s*\(snapshots so far kept in [^)]*\)", "", last.removeprefix("sphfmu: "))
         run.error = f"exit {p.returncode}: {last}"

@@ -245,3 +245,41 @@ def test_busy_wall_clock_is_the_union_of_the_runs_intervals(tmp_path):
     mtime = old.joinpath("command.json").stat().st_mtime
     assert abs(verify.busy_seconds([old]) - 5.0) < 1e-9
     assert abs(verify.busy_seconds([old, record("f", 5.0, mtime - 2.0)]) - 7.0) < 1e-6
+
+
+def test_reuse_keeps_results_and_reruns_runs_killed_by_a_signal(tmp_path, monkeypatch):
+    """`--reuse` resumes an interrupted suite: a run that ended, even with the scheme's own
+    error, is kept; one killed by a signal (the session's end killed a noise-box run with
+    SIGKILL, and the report showed "exit -9: (no message)" as its result) is run again."""
+    fake = tmp_path / "sphfmu"
+    # a stand-in binary: writes the summary the runner reads, or dies by SIGKILL when told to
+    fake.write_text('#!/bin/sh\n[ -e "$KILL_ME" ] && kill -9 $$\n'
+                    'while [ "$1" != "--out" ]; do shift; done\necho \'{"steps": 7}\' > "$2/summary.json"\n')
+    fake.chmod(0o755)
+    monkeypatch.setattr(verify, "BIN", fake)
+
+    def run(name):
+        return verify.Run(model="m.toml", scheme="case", sets=(), dir=tmp_path / name)
+
+    def record(name, error, **extra):
+        d = tmp_path / name
+        d.mkdir()
+        rec = {"command": ["m.toml", "case", []], "binary_mtime": fake.stat().st_mtime,
+               "seconds": 19.5, "error": error, **extra}
+        (d / "command.json").write_text(verify.json.dumps(rec))
+
+    record("failed", "exit 3: unstable")
+    kept = verify.execute(run("failed"), 1, reuse=True)
+    assert kept.reused and kept.error == "exit 3: unstable"
+    record("killed-old", "exit -9: (no message)")
+    again = verify.execute(run("killed-old"), 1, reuse=True)
+    assert not again.reused and again.error is None and again.summary == {"steps": 7}
+    record("killed-new", "killed by SIGKILL after 20 s", killed=True)
+    assert not verify.execute(run("killed-new"), 1, reuse=True).reused
+
+    monkeypatch.setenv("KILL_ME", str(fake))
+    dead = verify.execute(run("dies"), 1)
+    assert dead.error.startswith("killed by SIGKILL"), dead.error
+    assert verify.json.loads((tmp_path / "dies" / "command.json").read_text())["killed"] is True
+    monkeypatch.delenv("KILL_ME")
+    assert verify.execute(run("dies"), 1, reuse=True).error is None
