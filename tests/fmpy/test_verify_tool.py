@@ -124,7 +124,8 @@ def test_report_only_repeats_the_header_of_the_run_that_last_measured(tmp_path):
     finally:
         sys.argv = argv
     text = (out / "README.md").read_text()
-    assert "Wall time of this run: 12.4 min (re-measured: rosswog-5;" in text, text[:600]
+    assert ("Re-measured by the last run: rosswog-5, in 12.4 min; the other rows are kept in rows.json "
+            "from the last full run, whose wall time was 58.4 min.") in text, text[:600]
 
 
 def test_a_from_row_takes_the_named_rows_runs_and_keeps_its_own_reading(tmp_path):
@@ -283,3 +284,19 @@ def test_reuse_keeps_results_and_reruns_runs_killed_by_a_signal(tmp_path, monkey
     assert verify.json.loads((tmp_path / "dies" / "command.json").read_text())["killed"] is True
     monkeypatch.delenv("KILL_ME")
     assert verify.execute(run("dies"), 1, reuse=True).error is None
+
+
+def test_a_partial_run_keeps_the_full_runs_wall_time_in_the_header():
+    """After `--only`, the header still gives the last full run's wall time and work note (the
+    other rows come from it), read from meta.json as written before and after "full" existed."""
+    note = "262 of 356 runs were finished by earlier, interrupted invocations"
+    old_meta = {"seconds": 1028.8, "last": {"seconds": 1028.8, "only": "", "work": note}}
+    full = verify.last_full(old_meta)
+    assert full == {"seconds": 1028.8, "work": note}
+    assert verify.last_full({"seconds": 60.0, "last": {"seconds": 5.0, "only": "a", "work": ""}})["work"] == ""
+    assert verify.last_full({}) is None
+    whole = verify.wall_time_sentence("", 1028.8, note, full)
+    assert whole == f"Wall time of this run: 17.1 min ({note})."
+    part = verify.wall_time_sentence("rosswog-6", 66.0, "", full)
+    assert part.startswith("Re-measured by the last run: rosswog-6, in 1.1 min;"), part
+    assert f"whose wall time was 17.1 min ({note})." in part
