@@ -633,15 +633,9 @@ def main() -> int:
                  f"and kept the machine busy for {busy_seconds(sorted({r.dir for r in measured})) / 3600:.1f} h "
                  f"of wall clock across the invocations"
                  if any(r.reused for r in measured) else "")
-    # "seconds" and "full": the last full run's wall time and work note, which a partial run's
-    # header repeats; "last": the run the header describes, which --report-only repeats
     meta_path = out / "meta.json"
-    meta = json.loads(meta_path.read_text()) if meta_path.exists() else {}
-    if not a.only:
-        meta["seconds"] = elapsed
-        meta["full"] = {"seconds": elapsed, "work": work_note}
+    meta = record_run(json.loads(meta_path.read_text()) if meta_path.exists() else {}, a.only, elapsed, work_note)
     write_report(out / "README.md", rows, a.only, elapsed, work_note, last_full(meta))
-    meta["last"] = {"seconds": elapsed, "only": a.only, "work": work_note}
     meta_path.write_text(json.dumps(meta) + "\n")
     print(f"verify: report {out / 'README.md'} ({time.time() - t_start:.0f} s)")
     return 0
@@ -675,6 +669,19 @@ def fmt(v) -> str:
     if isinstance(v, str):
         return "failed: " + v.split(": ", 1)[-1][:60]
     return f"{v:.3g}"
+
+
+def record_run(meta: dict, only: str | None, seconds: float, work_note: str) -> dict:
+    """meta.json after a run. "seconds" and "full": the last full run's wall time and work note,
+    which a partial run's header repeats; "last": the run the header describes, which
+    --report-only repeats."""
+    if not only:
+        meta["seconds"] = seconds
+        meta["full"] = {"seconds": seconds, "work": work_note}
+    elif last_full(meta) is not None:
+        meta["full"] = last_full(meta)  # read before "last" no longer describes it
+    meta["last"] = {"seconds": seconds, "only": only, "work": work_note}
+    return meta
 
 
 def last_full(meta: dict) -> dict | None:

@@ -300,3 +300,8 @@ def test_a_partial_run_keeps_the_full_runs_wall_time_in_the_header():
     part = verify.wall_time_sentence("rosswog-6", 66.0, "", full)
     assert part.startswith("Re-measured by the last run: rosswog-6, in 1.1 min;"), part
     assert f"whose wall time was 17.1 min ({note})." in part
+    # a partial run after a full one written before "full" existed keeps the full one's note
+    meta = verify.record_run(dict(old_meta), "rosswog-6", 28.0, "")
+    assert verify.last_full(meta) == full and meta["last"]["only"] == "rosswog-6"
+    assert verify.last_full(verify.record_run(meta, "rosswog-5", 9.0, "")) == full
+    assert verify.last_full(verify.record_run(meta, "", 99.0, "w")) == {"seconds": 99.0, "work": "w"}
