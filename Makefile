@@ -90,7 +90,8 @@ openmpi:
 
 # Throughput table (particle-updates/s, pair interactions/s, the force loop's own rate and
 # the neighbour share), 2D and 3D periodic boxes, each size timed over at least 1e7
-# particle-updates (1,000 steps of 1e4 particles, 10 of 1e6); the 1e6 3D box on 2 ranks x 1 thread
+# particle-updates over the same 5 steps of a fresh box (200 times over for 1e4 particles, twice
+# for 1e6); the 1e6 3D box on 2 ranks x 1 thread
 # (mpirun; bytes per step, exchange share, halo size; docs/scaling.md); live coupling on loopback (round trips with
 # the zenoh node, publishing's cost per doStep); the side-by-side with PySPH (bench-peer); then
 # every performance goal with its figure, baseline, target and pass/short

@@ -14,7 +14,9 @@ pub struct BenchRow {
     pub particles: usize,
     pub kernel: String,
     pub neighbours: f64,
+    /// Timed steps per repeat, and repeats (each a fresh box timed over the same steps).
     pub steps: u64,
+    pub repeats: u64,
     pub seconds: f64,
     pub threads: usize,
     pub particle_updates_per_second: f64,
@@ -73,66 +75,101 @@ seed = 7
     )
 }
 
+/// Sums over the timed windows of one size.
+#[derive(Default)]
+struct Window {
+    seconds: f64,
+    force_pairs: u64,
+    all_pairs: u64,
+    neighbours: f64,
+    density: f64,
+    gradients: f64,
+    forces: f64,
+    h_iterations: f64,
+    h_solves: u64,
+    bytes_sent: u64,
+    exchange_seconds: f64,
+}
+
+/// `steps` timed steps of an N-particle box, `repeats` times over (each a fresh box with one
+/// untimed warm-up step, so every repeat times the same steps of the same run).
 pub fn run_one<const D: usize>(
     n: usize,
-    steps: u64,
+    (steps, repeats): (u64, u64),
     kernel: &str,
     ranks: Option<Arc<dyn Comm>>,
 ) -> Result<BenchRow, String> {
     let case = Case::parse(&box_case(D, n, kernel)).map_err(|e| e.0)?;
-    let mut sim = match ranks {
-        Some(comm) => case.distributed::<D>(comm).map_err(|e| e.0)?,
-        None => case.build::<D>().map_err(|e| e.0)?,
-    };
-    // warm-up step (allocations, first list build)
-    sim.step(f64::INFINITY).map_err(|e| e.to_string())?;
-    sim.sys.stats = Default::default();
-    let exchanged = |s: &crate::sim::Simulation<D>| s.layout.as_ref().map(|l| l.exchange());
-    let before = exchanged(&sim);
-    let mut force_pairs = 0u64;
-    let mut all_pairs = 0u64;
-    let t0 = Instant::now();
-    for _ in 0..steps {
-        sim.sys.stats.total_pairs = 0;
+    let mut w = Window::default();
+    let mut last = None;
+    for _ in 0..repeats.max(1) {
+        let mut sim = match ranks.clone() {
+            Some(comm) => case.distributed::<D>(comm).map_err(|e| e.0)?,
+            None => case.build::<D>().map_err(|e| e.0)?,
+        };
+        // warm-up step (allocations, first list build)
         sim.step(f64::INFINITY).map_err(|e| e.to_string())?;
-        force_pairs += sim.sys.stats.force_pairs;
-        all_pairs += sim.sys.stats.total_pairs;
+        sim.sys.stats = Default::default();
+        let exchanged = |s: &crate::sim::Simulation<D>| s.layout.as_ref().map(|l| l.exchange());
+        let before = exchanged(&sim);
+        let t0 = Instant::now();
+        for _ in 0..steps {
+            sim.sys.stats.total_pairs = 0;
+            sim.step(f64::INFINITY).map_err(|e| e.to_string())?;
+            w.force_pairs += sim.sys.stats.force_pairs;
+            w.all_pairs += sim.sys.stats.total_pairs;
+        }
+        w.seconds += t0.elapsed().as_secs_f64();
+        if let (Some((_, b)), Some((_, a))) = (before, exchanged(&sim)) {
+            w.bytes_sent += a.bytes_sent - b.bytes_sent;
+            w.exchange_seconds += a.seconds - b.seconds;
+        }
+        let st = &sim.sys.stats;
+        w.neighbours += st.seconds_neighbours;
+        w.density += st.seconds_density;
+        w.gradients += st.seconds_gradients;
+        w.forces += st.seconds_forces;
+        w.h_iterations += st.h_iterations_total;
+        w.h_solves += st.h_solves;
+        last = Some(sim);
     }
-    let secs = t0.elapsed().as_secs_f64();
-    let after = exchanged(&sim);
+    let sim = last.expect("at least one repeat");
+    let secs = w.seconds;
     // every particle, on every rank
     let np = sim.diagnostics().particles;
-    let st = &sim.sys.stats;
+    let timed_steps = steps * repeats.max(1);
     eprintln!(
-        "{D}D N={}: neighbours {:.2} s, density/h {:.2} s ({:.2} Newton iterations/particle), gradients {:.2} s, forces {:.2} s, total {:.2} s",
-        sim.sys.particles.len(), st.seconds_neighbours, st.seconds_density, st.h_iterations, st.seconds_gradients, st.seconds_forces, secs
+        "{D}D N={}: neighbours {:.2} s, density/h {:.2} s ({:.2} Newton iterations/particle per solve, mean over the timed steps), gradients {:.2} s, forces {:.2} s, total {:.2} s",
+        sim.sys.particles.len(), w.neighbours, w.density,
+        w.h_iterations / w.h_solves.max(1) as f64, w.gradients, w.forces, secs
     );
     let threads = rayon::current_num_threads();
-    let (ranks, bytes, exchange, halo) = match (before, after) {
-        (Some((r, b)), Some((_, a))) => (
+    let (ranks, bytes, exchange, halo) = match sim.layout.as_ref().map(|l| l.exchange()) {
+        Some((r, a)) => (
             r,
-            (a.bytes_sent - b.bytes_sent) as f64 / steps as f64,
-            (a.seconds - b.seconds) / secs,
+            w.bytes_sent as f64 / timed_steps as f64,
+            w.exchange_seconds / secs,
             a.halo_particles as f64 / sim.sys.owned().max(1) as f64,
         ),
-        _ => (1, 0.0, 0.0, 0.0),
+        None => (1, 0.0, 0.0, 0.0),
     };
     Ok(BenchRow {
         dimension: D,
         particles: np,
         kernel: sim.sys.kernel.kernel.to_string_name(),
-        // this rank's pairs per particle it holds (its halo copies included)
+        // this rank's pairs per particle it holds (its halo copies included), last step
         neighbours: sim.sys.stats.force_pairs as f64 / sim.sys.particles.len().max(1) as f64,
         steps,
+        repeats: repeats.max(1),
         seconds: secs,
         threads,
-        particle_updates_per_second: np as f64 * steps as f64 / secs,
-        force_pairs_per_second: force_pairs as f64 / secs,
-        all_pairs_per_second: all_pairs as f64 / secs,
-        force_loop_pairs_per_second_per_thread: force_pairs as f64
-            / st.seconds_forces.max(1e-12)
+        particle_updates_per_second: np as f64 * timed_steps as f64 / secs,
+        force_pairs_per_second: w.force_pairs as f64 / secs,
+        all_pairs_per_second: w.all_pairs as f64 / secs,
+        force_loop_pairs_per_second_per_thread: w.force_pairs as f64
+            / w.forces.max(1e-12)
             / threads as f64,
-        neighbour_share: st.seconds_neighbours / secs,
+        neighbour_share: w.neighbours / secs,
         ranks,
         bytes_per_step: bytes,
         exchange_share: exchange,
@@ -140,8 +177,11 @@ pub fn run_one<const D: usize>(
     })
 }
 
-/// Every size in every dimension; `(steps, min_updates)`: a size of n particles runs
-/// max(steps, ⌈min_updates/n⌉) steps.
+/// Every size in every dimension; `(steps, min_updates)`: a size of n particles times the same
+/// `steps` steps ⌈min_updates/(n·steps)⌉ times over. The perturbed box relaxes over its first
+/// ~100 steps (the h solve needs 1.6 Newton iterations per particle in steps 1–10 and 1.05
+/// over steps 1–1000 of 10⁴ particles in 2D), so timing more steps of a small box than of a
+/// large one would compare different stretches of the run, not the cost of N.
 pub fn run_table(
     sizes: &[usize],
     dims: &[usize],
@@ -152,11 +192,14 @@ pub fn run_table(
     let mut rows = Vec::new();
     for &d in dims {
         for &n in sizes {
-            let steps = at_least.max(min_updates.div_ceil(n.max(1) as u64));
+            let window = (
+                at_least,
+                min_updates.div_ceil((n.max(1) as u64) * at_least.max(1)),
+            );
             let row = match d {
-                1 => run_one::<1>(n, steps, kernel, ranks.clone())?,
-                2 => run_one::<2>(n, steps, kernel, ranks.clone())?,
-                3 => run_one::<3>(n, steps, kernel, ranks.clone())?,
+                1 => run_one::<1>(n, window, kernel, ranks.clone())?,
+                2 => run_one::<2>(n, window, kernel, ranks.clone())?,
+                3 => run_one::<3>(n, window, kernel, ranks.clone())?,
                 _ => return Err(format!("--dims: must be 1, 2 or 3, got {d}")),
             };
             eprintln!(
@@ -171,7 +214,7 @@ pub fn run_table(
 
 pub fn format_table(rows: &[BenchRow]) -> String {
     let mut s = String::from(
-        "| dim | particles | kernel | neighbours | ranks × threads | steps | particle-updates/s | force pairs/s | all pairs/s | force loop pairs/s/thread | neighbour share | bytes sent/step | exchange share | halo/owned |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| dim | particles | kernel | neighbours | ranks × threads | steps (× repeats) | particle-updates/s | force pairs/s | all pairs/s | force loop pairs/s/thread | neighbour share | bytes sent/step | exchange share | halo/owned |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         s.push_str(&format!(
@@ -182,7 +225,7 @@ pub fn format_table(rows: &[BenchRow]) -> String {
             r.neighbours,
             r.ranks,
             r.threads,
-            r.steps,
+            if r.repeats > 1 { format!("{} × {}", r.steps, r.repeats) } else { r.steps.to_string() },
             r.particle_updates_per_second,
             r.force_pairs_per_second,
             r.all_pairs_per_second,

@@ -5,6 +5,7 @@
 
 mod common;
 
+mod bench_table;
 mod bodies;
 mod case_errors;
 mod case_size;

@@ -124,8 +124,9 @@ enum Command {
         /// Steps per measurement
         #[arg(long, default_value_t = 5)]
         steps: u64,
-        /// At least this many particle-updates per measurement: a size of N particles runs
-        /// max(steps, ⌈U/N⌉) steps, so a small box is timed over as long as a large one
+        /// At least this many particle-updates per measurement: a size of N particles times
+        /// the same `--steps` steps ⌈U/(N·steps)⌉ times over, each time from a fresh box, so a
+        /// small box is timed over as long as a large one and over the same stretch of the run
         /// (five steps of 1e4 particles last a few hundredths of a second)
         #[arg(long, value_name = "U", default_value_t = 0)]
         min_updates: u64,
