@@ -100,9 +100,10 @@ pub fn run_one<const D: usize>(
     ranks: Option<Arc<dyn Comm>>,
 ) -> Result<BenchRow, String> {
     let case = Case::parse(&box_case(D, n, kernel)).map_err(|e| e.0)?;
+    let repeats = repeats.max(1);
     let mut w = Window::default();
     let mut last = None;
-    for _ in 0..repeats.max(1) {
+    for _ in 0..repeats {
         let mut sim = match ranks.clone() {
             Some(comm) => case.distributed::<D>(comm).map_err(|e| e.0)?,
             None => case.build::<D>().map_err(|e| e.0)?,
@@ -137,7 +138,7 @@ pub fn run_one<const D: usize>(
     let secs = w.seconds;
     // every particle, on every rank
     let np = sim.diagnostics().particles;
-    let timed_steps = steps * repeats.max(1);
+    let timed_steps = steps * repeats;
     eprintln!(
         "{D}D N={}: neighbours {:.2} s, density/h {:.2} s ({:.2} Newton iterations/particle per solve, mean over the timed steps), gradients {:.2} s, forces {:.2} s, total {:.2} s",
         sim.sys.particles.len(), w.neighbours, w.density,
@@ -160,7 +161,7 @@ pub fn run_one<const D: usize>(
         // this rank's pairs per particle it holds (its halo copies included), last step
         neighbours: sim.sys.stats.force_pairs as f64 / sim.sys.particles.len().max(1) as f64,
         steps,
-        repeats: repeats.max(1),
+        repeats,
         seconds: secs,
         threads,
         particle_updates_per_second: np as f64 * timed_steps as f64 / secs,
