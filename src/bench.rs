@@ -101,6 +101,8 @@ pub fn run_one<const D: usize>(
 ) -> Result<BenchRow, String> {
     let case = Case::parse(&box_case(D, n, kernel)).map_err(|e| e.0)?;
     let repeats = repeats.max(1);
+    // a distributed run's exchange counters (ranks, bytes, seconds, halo size)
+    let exchanged = |s: &crate::sim::Simulation<D>| s.layout.as_ref().map(|l| l.exchange());
     let mut w = Window::default();
     let mut last = None;
     for _ in 0..repeats {
@@ -111,7 +113,6 @@ pub fn run_one<const D: usize>(
         // warm-up step (allocations, first list build)
         sim.step(f64::INFINITY).map_err(|e| e.to_string())?;
         sim.sys.stats = Default::default();
-        let exchanged = |s: &crate::sim::Simulation<D>| s.layout.as_ref().map(|l| l.exchange());
         let before = exchanged(&sim);
         let t0 = Instant::now();
         for _ in 0..steps {
@@ -145,7 +146,7 @@ pub fn run_one<const D: usize>(
         w.h_iterations / w.h_solves.max(1) as f64, w.gradients, w.forces, secs
     );
     let threads = rayon::current_num_threads();
-    let (ranks, bytes, exchange, halo) = match sim.layout.as_ref().map(|l| l.exchange()) {
+    let (ranks, bytes, exchange, halo) = match exchanged(&sim) {
         Some((r, a)) => (
             r,
             w.bytes_sent as f64 / timed_steps as f64,
