@@ -17,6 +17,7 @@ pub mod parallel;
 pub mod particles;
 pub mod runner;
 pub mod scheme;
+pub mod scratch;
 pub mod sim;
 pub mod system;
 pub mod threads;

@@ -133,6 +133,8 @@ pub struct System<const D: usize> {
     /// The other ranks of a distributed run, for the sums outside the scheme's passes that
     /// span them (body loads, probes and port samples); `None` in a single process.
     pub ranks: Option<std::sync::Arc<dyn RankSums>>,
+    /// Arrays the passes fill anew every step, kept for the next step (memory, not state).
+    pub scratch: crate::scratch::Scratch,
 }
 
 /// Sums over the ranks of a distributed run (`parallel`): every rank's exact registers
@@ -264,7 +266,8 @@ impl<const D: usize> System<D> {
                     .map(|&h| self.kernel.radius(h) * (1.0 + skin))
                     .collect();
             self.grid = CellGrid::build(&p.pos, &self.domain, &v.reach);
-            v.list = NeighbourList::build(&p.pos, &v.reach, &self.domain, &self.grid);
+            let old = std::mem::take(&mut v.list);
+            v.list = NeighbourList::build_reusing(&p.pos, &v.reach, &self.domain, &self.grid, old);
             if self.canonical_order {
                 v.list.sort_rows_by_id(&p.id);
             }
@@ -296,7 +299,10 @@ impl<const D: usize> System<D> {
         visitor: &V,
     ) {
         let t0 = std::time::Instant::now();
-        self.neighbours = cut::cut(self, out, visitor);
+        let old = std::mem::take(&mut self.neighbours);
+        let mut scratch = std::mem::take(&mut self.scratch);
+        self.neighbours = cut::cut(self, out, visitor, old, &mut scratch);
+        self.scratch = scratch;
         let dt = t0.elapsed().as_secs_f64();
         self.stats.seconds_neighbours += dt;
         self.stats.seconds_cut += dt;

@@ -475,6 +475,7 @@ impl Case {
             canonical_order: true,
             halo: 0,
             ranks: None,
+            scratch: Default::default(),
             frame: self.frame.as_ref().map(|f| f.build::<D>()),
             ports,
             drives: self.drives::<D>()?,

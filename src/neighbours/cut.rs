@@ -17,6 +17,7 @@
 use super::lanes::{fill_pair, finish_pairs, padded, Wide, Width, LANES};
 use super::{unpack, NeighbourList};
 use crate::particles::Vector;
+use crate::scratch::Scratch;
 use crate::system::System;
 use crate::threads::LIGHT;
 use rayon::prelude::*;
@@ -93,16 +94,21 @@ struct CutRecord<const D: usize> {
     wall: bool,
 }
 
-/// The working list cut from `sys`'s master list, with `visitor` run on the kept pairs.
+/// The working list cut from `sys`'s master list, with `visitor` run on the kept pairs,
+/// written into `reuse`'s allocations (the working list it replaces); the records it packs
+/// live in `scratch` between steps.
 pub fn cut<const D: usize, V: CutVisitor<D>>(
     sys: &System<D>,
     out: &mut [V::Acc],
     visitor: &V,
+    reuse: NeighbourList,
+    scratch: &mut Scratch,
 ) -> NeighbourList {
     let p = &sys.particles;
     let k = &sys.kernel;
     let n = p.len();
-    let recs: Vec<CutRecord<D>> = (0..n)
+    let mut recs: Vec<CutRecord<D>> = scratch.take();
+    (0..n)
         .into_par_iter()
         .with_min_len(LIGHT)
         .map(|i| CutRecord {
@@ -112,19 +118,25 @@ pub fn cut<const D: usize, V: CutVisitor<D>>(
             m: p.mass[i],
             wall: p.body[i] != 0,
         })
-        .collect();
+        .collect_into_vec(&mut recs);
     let wide = Width::detect();
-    let list = &sys.verlet.list;
-    NeighbourList::from_chunks(out, |start, accs| {
-        wide.run(CutRows {
-            sys,
-            recs: &recs,
-            visitor,
-            start,
-            accs,
-            list,
-        })
-    })
+    let master = &sys.verlet.list;
+    let list = NeighbourList::from_chunks(
+        out,
+        |start, accs| {
+            wide.run(CutRows {
+                sys,
+                recs: &recs,
+                visitor,
+                start,
+                accs,
+                list: master,
+            })
+        },
+        reuse,
+    );
+    scratch.keep(recs);
+    list
 }
 
 /// One chunk of rows: its entry counts and kept entries. The lane arrays live in `run`'s

@@ -96,6 +96,18 @@ impl NeighbourList {
         domain: &Domain<D>,
         grid: &CellGrid<D>,
     ) -> Self {
+        Self::build_reusing(pos, reach, domain, grid, Self::default())
+    }
+
+    /// [`Self::build`] into `reuse`'s allocations (the list this one replaces; see
+    /// [`Self::recycled`]).
+    pub fn build_reusing<const D: usize>(
+        pos: &[Vector<D>],
+        reach: &[f64],
+        domain: &Domain<D>,
+        grid: &CellGrid<D>,
+        reuse: Self,
+    ) -> Self {
         let n = pos.len();
         const CHUNK: usize = 512;
         // What the search reads of a candidate, in cell order: position and squared reach,
@@ -160,7 +172,12 @@ impl NeighbourList {
         rev.par_sort_unstable();
         // Row a: its gather entries, then the entries handed over to it, written once into
         // the final array (chunk by chunk, in parallel).
-        let mut offsets = vec![0usize; n + 1];
+        let Self {
+            mut offsets,
+            mut entries,
+        } = reuse;
+        offsets.clear();
+        offsets.resize(n + 1, 0);
         for (chunk, part) in parts.iter().enumerate() {
             for (i, &c) in part.0.iter().enumerate() {
                 offsets[chunk * CHUNK + i + 1] = c as usize;
@@ -172,7 +189,7 @@ impl NeighbourList {
         for a in 0..n {
             offsets[a + 1] += offsets[a];
         }
-        let mut entries = vec![0u32; offsets[n]];
+        Self::recycled(&mut entries, offsets[n]);
         let slices = split_lengths(
             &mut entries,
             (0..parts.len())
@@ -239,7 +256,7 @@ impl NeighbourList {
     /// Lists for n particles whose row a is written by `fill(a, out)` (appending to `out`),
     /// built in parallel chunks of rows and joined in order.
     fn from_rows(n: usize, fill: impl Fn(usize, &mut Vec<u32>) + Sync) -> Self {
-        Self::from_chunks(&mut vec![(); n], |start, rows| {
+        let rows_of = |start: usize, rows: &mut [()]| {
             let mut counts = Vec::with_capacity(rows.len());
             let mut out = Vec::new();
             for a in start..start + rows.len() {
@@ -248,16 +265,29 @@ impl NeighbourList {
                 counts.push((out.len() - before) as u32);
             }
             (counts, out)
-        })
+        };
+        Self::from_chunks(&mut vec![(); n], rows_of, Self::default())
+    }
+
+    /// `entries` made `len` long for every slot to be written anew: what it held is kept
+    /// (no zeroing), only a longer list appends zeros. Lists are made every step (the cut)
+    /// and at every rebuild; a fresh array each time cost one page fault per 4 KiB written
+    /// once it outgrew the allocator's reuse (glibc maps blocks over 32 MiB afresh and unmaps
+    /// them when freed): at 10⁶ particles in 3D, 1.46 million faults in the six steps of
+    /// `sphfmu bench --sizes 1000000 --dims 3 --steps 5`, 29 % of them writing the cut's
+    /// entries (BENCHMARKS.md, 2026-12-07, sixth session).
+    fn recycled(entries: &mut Vec<u32>, len: usize) {
+        entries.resize(len, 0);
     }
 
     /// Lists for `acc.len()` particles built in parallel chunks of rows ([`row_chunk`]) and
     /// joined in order: `chunk(start, &mut acc[start..])` returns the entry counts and the
     /// entries of rows `start..start + its slice's length`, and may accumulate into their
-    /// slots of `acc`.
+    /// slots of `acc`. The lists are written into `reuse`'s allocations.
     pub(crate) fn from_chunks<T: Send>(
         acc: &mut [T],
         chunk: impl Fn(usize, &mut [T]) -> (Vec<u32>, Vec<u32>) + Sync,
+        reuse: Self,
     ) -> Self {
         let n = acc.len();
         let chunk_len = row_chunk(n);
@@ -266,13 +296,18 @@ impl NeighbourList {
             .enumerate()
             .map(|(c, rows)| chunk(c * chunk_len, rows))
             .collect();
-        Self::concat(n, parts)
+        Self::concat(n, parts, reuse)
     }
 
     /// The lists whose rows are the chunks' rows in order: each part holds its rows' entry
     /// counts and their entries.
-    fn concat(n: usize, parts: Vec<(Vec<u32>, Vec<u32>)>) -> Self {
-        let mut offsets = Vec::with_capacity(n + 1);
+    fn concat(n: usize, parts: Vec<(Vec<u32>, Vec<u32>)>, reuse: Self) -> Self {
+        let Self {
+            mut offsets,
+            mut entries,
+        } = reuse;
+        offsets.clear();
+        offsets.reserve(n + 1);
         offsets.push(0usize);
         for (counts, _) in &parts {
             for &c in counts {
@@ -281,7 +316,7 @@ impl NeighbourList {
         }
         // each part's entries copied into its own slice of the array, in parallel (joined
         // on one thread, the copy was a serial stretch of every step's cut)
-        let mut entries = vec![0u32; offsets[n]];
+        Self::recycled(&mut entries, offsets[n]);
         let slices = split_lengths(&mut entries, parts.iter().map(|(_, out)| out.len()));
         parts
             .par_iter()

@@ -93,6 +93,7 @@ fn solve<const D: usize>(
     loop {
         let h_allowed = sys.prepare_master_list(SKIN, force);
         let t0 = std::time::Instant::now();
+        let buffer = sys.scratch.take();
         let results: Vec<HSolve> = {
             let s = &*sys;
             s.kernel.visit(SolvePass {
@@ -102,6 +103,7 @@ fn solve<const D: usize>(
                 start_h: &start_h,
                 h_allowed: &h_allowed,
                 extra: extra.as_ref().map(|e| e.0),
+                buffer,
             })
         };
         sys.stats.seconds_density += t0.elapsed().as_secs_f64();
@@ -154,6 +156,7 @@ fn solve<const D: usize>(
             }
         }
         sys.stats.h_capped = capped;
+        sys.scratch.keep(results);
         if still.is_empty() || last {
             break;
         }
@@ -211,17 +214,19 @@ struct SolvePass<'a, const D: usize> {
     start_h: &'a [f64],
     h_allowed: &'a [f64],
     extra: Option<&'a [[f64; 2]]>,
+    /// The results' array, kept between solves (`crate::scratch`).
+    buffer: Vec<HSolve>,
 }
 
 impl<const D: usize> KernelVisitor<D> for SolvePass<'_, D> {
     type Output = Vec<HSolve>;
-    fn visit<K: Kernel + Copy>(self, kernel: &DimKernel<D, K>) -> Vec<HSolve> {
-        let mut out: Vec<HSolve> = self
-            .pending
+    fn visit<K: Kernel + Copy>(mut self, kernel: &DimKernel<D, K>) -> Vec<HSolve> {
+        let mut out = std::mem::take(&mut self.buffer);
+        self.pending
             .par_iter()
             .with_min_len(LIGHT)
             .map(|_| HSolve::default())
-            .collect();
+            .collect_into_vec(&mut out);
         for_each_row(&SolveRows { v: &self, kernel }, &mut out);
         out
     }

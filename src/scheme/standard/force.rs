@@ -95,7 +95,10 @@ pub(crate) fn force_pass<const D: usize>(
 ) {
     let t0 = std::time::Instant::now();
     let n = sys.particles.len();
-    let mut out = vec![ForceAcc::<D>::default(); n];
+    // the per-particle arrays of this pass, kept between steps (`crate::scratch`)
+    let mut out: Vec<ForceAcc<D>> = sys.scratch.take();
+    out.resize(n, ForceAcc::default());
+    let mut recs: Vec<ForceRecord<D>> = sys.scratch.take();
     let p = &sys.particles;
     // Which particles use the standard form (all for GradH; with rpSPH's shock switch those
     // with −h ∇·v > 3c).
@@ -109,7 +112,7 @@ pub(crate) fn force_pass<const D: usize>(
     };
     // Everything the pair term reads of a particle, packed: one record instead of a cache
     // line per field array. P/(Ω ρ²) is computed once rather than per pair.
-    let recs: Vec<ForceRecord<D>> = {
+    {
         let bal = &p.extra_scalars[balsara_slot];
         let bodies = &sys.bodies;
         (0..n)
@@ -136,8 +139,8 @@ pub(crate) fn force_pass<const D: usize>(
                 wall: p.body[a] > 0,
                 laminar: p.body[a] == 0 || bodies[p.body[a] as usize - 1].no_slip,
             })
-            .collect()
-    };
+            .collect_into_vec(&mut recs);
+    }
     let flags = match form {
         PressureForm::GradH => (false, false, false),
         PressureForm::Relative {
@@ -173,6 +176,8 @@ pub(crate) fn force_pass<const D: usize>(
         .zip(&out)
         .with_min_len(LIGHT)
         .for_each(|(d, o)| *d = o.drho);
+    sys.scratch.keep(out);
+    sys.scratch.keep(recs);
 }
 
 /// The force pass's inputs, handed the concrete kernel by [`DimKernel::visit`].

@@ -238,6 +238,7 @@ impl<const D: usize> Scheme<D> for StandardSph {
                 sys.update_eos();
                 let t0 = std::time::Instant::now();
                 finish_gradients(sys, &grads, self.balsara_slot, self.params.balsara);
+                sys.scratch.keep(grads);
                 sys.stats.seconds_gradients += t0.elapsed().as_secs_f64();
                 // the force reads the neighbours' Balsara factors
                 let (sync, p) = (sys.halo_sync(), &mut sys.particles);
@@ -273,13 +274,13 @@ fn continuity_h<const D: usize>(sys: &mut System<D>) {
 /// visits the same pairs in the same order, so the sums are the same to the bit). Their time
 /// counts as neighbour time. Finish with [`finish_gradients`] once the EOS has given c.
 fn cut_lists_with_gradient_sums<const D: usize>(sys: &mut System<D>) -> Vec<GradAcc<D>> {
-    let mut grads: Vec<GradAcc<D>> = sys
-        .particles
+    let mut grads: Vec<GradAcc<D>> = sys.scratch.take();
+    sys.particles
         .h
         .par_iter()
         .with_min_len(LIGHT)
         .map(|&h| GradAcc::new(h))
-        .collect();
+        .collect_into_vec(&mut grads);
     let kernel = sys.kernel;
     kernel.visit(GradientCut {
         sys,
