@@ -315,7 +315,13 @@ impl NeighbourList {
             }
         }
         // each part's entries copied into its own slice of the array, in parallel (joined
-        // on one thread, the copy was a serial stretch of every step's cut)
+        // on one thread, the copy was a serial stretch of every step's cut); the slices cover
+        // the array, so nothing of the list it recycles is left
+        assert_eq!(
+            parts.iter().map(|(_, out)| out.len()).sum::<usize>(),
+            offsets[n],
+            "a chunk's entry counts add up to its entries"
+        );
         Self::recycled(&mut entries, offsets[n]);
         let slices = split_lengths(&mut entries, parts.iter().map(|(_, out)| out.len()));
         parts
