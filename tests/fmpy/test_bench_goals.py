@@ -79,6 +79,39 @@ def test_sod3d_against_swift_measured_on_this_cpu_else_the_proxy(monkeypatch, tm
         assert l1["verdict"] == "pass" and share["verdict"] == "short"  # 0.0092 <= 0.0104; 50 %
 
 
+def test_cost_and_tank_goals_read_the_median_of_interleaved_rounds(monkeypatch, tmp_path):
+    # rounds whose single runs would pass, fail and pass: the median decides, and every round's
+    # figure is listed
+    costs = iter([1.0, 2.0,  1.0, 2.7,  1.0, 2.2,    # crksph rounds: 2.0x, 2.7x, 2.2x
+                  1.0, 2.0,  1.0, 2.7,  1.0, 2.6])   # rosswog-f1 rounds: 2.0x, 2.7x, 2.6x
+    monkeypatch.setattr(bench_goals, "preset_defaults",
+                        lambda: {"crksph": ("septic-spline", "2", "crk-rk2", "0.25"),
+                                 "rosswog-f1": ("wendland-c6", "2.2", "ssp-rk3", "0.5")})
+    monkeypatch.setattr(bench_goals, "run", lambda case, out, **k:
+                        {"particle_updates_per_second": 1.0 / next(costs)})
+    g = bench_goals.Goals()
+    bench_goals.cost_goals(g, str(tmp_path))
+    crk, f1 = g.rows
+    assert (crk["figure"], crk["verdict"]) == ("2.20x", "pass")
+    assert (f1["figure"], f1["verdict"]) == ("2.60x", "short")
+    assert f1["note"] == "pairs: 2.00x, 2.70x, 2.60x"
+
+    # the tank: 1-thread and 2-thread wall times per round; the snapshots of the first
+    # round's two 2-thread runs and the 1-thread run are compared byte for byte
+    walls = iter([6.0, 3.0, 3.1,  6.0, 4.0,  6.0, 3.4])   # speed-ups 2.0, 1.5, 1.76
+    def tank(case, out, threads):
+        (tmp_path / out).mkdir(parents=True, exist_ok=True)
+        (tmp_path / out / "snapshot_00000.csv").write_text("x\n1\n")
+        return {"wall_seconds": next(walls)}
+    monkeypatch.setattr(bench_goals, "run", tank)
+    g = bench_goals.Goals()
+    bench_goals.thread_goals(g, str(tmp_path))
+    speed, same, independent = g.rows
+    assert (speed["figure"], speed["verdict"]) == ("1.76x", "pass")
+    assert speed["note"] == "pairs: 2.00x, 1.50x, 1.76x"
+    assert same["verdict"] == "pass" and independent["verdict"] == "pass"
+
+
 def test_swift_reader_exact_solution_and_rate(tmp_path):
     import swift_sod3d
     # Toro (3rd ed.) Sod at gamma = 1.4: rho*_L 0.42632, rho*_R 0.26557
