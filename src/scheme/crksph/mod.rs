@@ -251,6 +251,7 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
         let t0 = std::time::Instant::now();
         let mut work = std::mem::take(&mut self.work);
         work.reset(sys);
+        let mut scratch = std::mem::take(&mut sys.scratch);
         let out = CrkMomentum {
             sys,
             vol: &vol,
@@ -259,7 +260,8 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
             grads: &grads,
             visc: self.visc,
         }
-        .run(&mut work.acc);
+        .run(&mut work.acc, &mut scratch);
+        sys.scratch = scratch;
         self.work = work;
         paper_step::store(sys, t0, &out);
         super::compatible::refresh_halo_accelerations(sys);

@@ -59,10 +59,16 @@ struct CrkRecord<const D: usize> {
 }
 
 impl<const D: usize> CrkMomentum<'_, D> {
-    /// The pair sums per particle, and a_ij into `slots` (one per listed pair, in list order).
-    pub fn run(&self, slots: &mut [Vector<D>]) -> Vec<PairSums<D>> {
+    /// The pair sums per particle, and a_ij into `slots` (one per listed pair, in list order);
+    /// the particles' records live in `scratch` between steps.
+    pub fn run(
+        &self,
+        slots: &mut [Vector<D>],
+        scratch: &mut crate::scratch::Scratch,
+    ) -> Vec<PairSums<D>> {
         let p = &self.sys.particles;
-        let recs: Vec<CrkRecord<D>> = (0..p.len())
+        let mut recs: Vec<CrkRecord<D>> = scratch.take();
+        (0..p.len())
             .into_par_iter()
             .with_min_len(LIGHT)
             .map(|a| CrkRecord {
@@ -78,7 +84,7 @@ impl<const D: usize> CrkMomentum<'_, D> {
                 coef: self.coef[a],
                 grad: self.grads[a],
             })
-            .collect();
+            .collect_into_vec(&mut recs);
         let mut out = PairRow::split(self.sys, slots);
         let rows = Rows {
             pass: self,
@@ -86,6 +92,7 @@ impl<const D: usize> CrkMomentum<'_, D> {
             _slots: PhantomData,
         };
         for_each_row(&rows, &mut out);
+        scratch.keep(recs);
         PairRow::sums(out)
     }
 }

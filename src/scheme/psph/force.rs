@@ -58,10 +58,16 @@ pub(super) struct PsphForce<'a, const D: usize> {
 }
 
 impl<const D: usize> PsphForce<'_, D> {
-    /// The pair sums per particle, and a_ij into `slots` (one per listed pair, in list order).
-    pub fn run(&self, slots: &mut [Vector<D>]) -> Vec<PairSums<D>> {
+    /// The pair sums per particle, and a_ij into `slots` (one per listed pair, in list order);
+    /// the particles' records live in `scratch` between steps.
+    pub fn run(
+        &self,
+        slots: &mut [Vector<D>],
+        scratch: &mut crate::scratch::Scratch,
+    ) -> Vec<PairSums<D>> {
         let p = &self.sys.particles;
-        let recs: Vec<PsphRecord<D>> = (0..p.len())
+        let mut recs: Vec<PsphRecord<D>> = scratch.take();
+        (0..p.len())
             .into_par_iter()
             .with_min_len(LIGHT)
             .map(|a| PsphRecord {
@@ -87,13 +93,14 @@ impl<const D: usize> PsphForce<'_, D> {
                 alpha: p.alpha[a],
                 wall: p.body[a] > 0,
             })
-            .collect();
+            .collect_into_vec(&mut recs);
         let mut out = PairRow::split(self.sys, slots);
         self.sys.kernel.visit(Visit {
             pass: self,
             recs: &recs,
             out: &mut out,
         });
+        scratch.keep(recs);
         PairRow::sums(out)
     }
 }

@@ -167,6 +167,7 @@ impl<const D: usize> Scheme<D> for Psph<D> {
         let t0 = std::time::Instant::now();
         let mut work = std::mem::take(&mut self.work);
         work.reset(sys);
+        let mut scratch = std::mem::take(&mut sys.scratch);
         let out = force::PsphForce {
             sys,
             fcoef: &self.fcoef,
@@ -174,7 +175,8 @@ impl<const D: usize> Scheme<D> for Psph<D> {
             visc: self.visc,
             alpha_c: self.params.conductivity,
         }
-        .run(&mut work.acc);
+        .run(&mut work.acc, &mut scratch);
+        sys.scratch = scratch;
         work.exchange = out.iter().map(|o| o.exchange).collect();
         self.work = work;
         paper_step::store(sys, t0, &out);

@@ -478,8 +478,12 @@ impl<const D: usize> Scheme<D> for Rosswog {
         let ia = self.params.gradient == GradientOperator::IntegralApproximation;
         let literal = self.params.signal_velocity == SignalVelocity::Literal;
         let conduction = if self.params.conduction { 1.0 } else { 0.0 };
+        // the pass's per-particle arrays, kept between steps (`crate::scratch`)
+        let mut recs: Vec<Rec<D>> = sys.scratch.take();
+        let mut out: Vec<Acc<D>> = sys.scratch.take();
+        out.resize(n, Acc::default());
         let p = &sys.particles;
-        let recs: Vec<Rec<D>> = (0..n)
+        (0..n)
             .into_par_iter()
             .map(|a| {
                 let v = p.mass[a] / p.rho[a];
@@ -497,8 +501,7 @@ impl<const D: usize> Scheme<D> for Rosswog {
                     k: p.alpha[a],
                 }
             })
-            .collect();
-        let mut out = vec![Acc::<D>::default(); n];
+            .collect_into_vec(&mut recs);
         let k = &sys.kernel;
         let grad = |i: usize, r: &Rec<D>, dx: &Vector<D>, dist: f64, code: u8| -> Vector<D> {
             pair_gradient(k, ia, &mats[i], r.h, dx, dist, code)
@@ -553,6 +556,8 @@ impl<const D: usize> Scheme<D> for Rosswog {
             let du = recs[a].a / m * o.du_hydro + o.du_diss;
             (o.dv / m + o.dv_diss, du, o.vsig)
         });
+        sys.scratch.keep(recs);
+        sys.scratch.keep(out);
         Ok(())
     }
 
