@@ -339,7 +339,7 @@ fn lanes_against_pair_formulas<const D: usize>(boundary: &str, spacing: f64) -> 
     sim.scheme.evaluate(&mut sim.sys).unwrap();
     let sys = &sim.sys;
     let p = &sys.particles;
-    let (kern, vol) = pair_kernels_and_volumes(sys);
+    let (kern, vol) = pair_kernels_and_volumes(sys, Vec::new());
     let (coef, _) = coefficients(sys, &vol, &kern, RkOrder::Linear);
     let rho = coefficients_and_density(sys, &vol, &kern, RkOrder::Linear).rho;
     let grads = velocity_gradients(sys, &vol, &coef, &kern);

@@ -178,7 +178,8 @@ impl<const D: usize> Crksph<D> {
             smoothing::update_lists(sys);
         }
         let t0 = std::time::Instant::now();
-        let (kern, mut vol) = pair_kernels_and_volumes(sys);
+        let slots = sys.scratch.take();
+        let (kern, mut vol) = pair_kernels_and_volumes(sys, slots);
         // the coefficients read the neighbours' V (eq 75)
         sync.refresh(vec![rows(&mut vol)]);
         // h_ideal = η V^{1/ν}, at most 25 % from the current h per step (IdealH relaxes too)
@@ -262,6 +263,7 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
         }
         .run(&mut work.acc, &mut scratch);
         sys.scratch = scratch;
+        sys.scratch.keep(kern);
         self.work = work;
         paper_step::store(sys, t0, &out);
         super::compatible::refresh_halo_accelerations(sys);
@@ -279,7 +281,8 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
         if !solve {
             sys.particles.h.clone_from(&self.h_next);
         }
-        self.state(sys, solve);
+        let (_, _, kern) = self.state(sys, solve);
+        sys.scratch.keep(kern);
     }
 
     fn pair_work(&self) -> Option<&PairWork<D>> {

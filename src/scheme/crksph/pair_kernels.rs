@@ -34,11 +34,17 @@ impl PairKernel {
 }
 
 /// [`PairKernel`] for every pair of the working list, in list order (indexed by
-/// [`crate::system::Pair::index`]), and the volumes V_i (eq 75).
-pub fn pair_kernels_and_volumes<const D: usize>(sys: &System<D>) -> (Vec<PairKernel>, Vec<f64>) {
+/// [`crate::system::Pair::index`]), and the volumes V_i (eq 75). The pairs are written into
+/// `slots`' allocation (an earlier step's, kept in `crate::scratch`: one slot per pair is the
+/// largest array of a step).
+pub fn pair_kernels_and_volumes<const D: usize>(
+    sys: &System<D>,
+    mut slots: Vec<PairKernel>,
+) -> (Vec<PairKernel>, Vec<f64>) {
     let p = &sys.particles;
     let hinv = inverse_h(&p.h);
-    let mut slots = vec![PairKernel::default(); sys.neighbours.total_pairs()];
+    slots.clear();
+    slots.resize(sys.neighbours.total_pairs(), PairKernel::default());
     let vol = {
         let mut out: Vec<RowOut> = sys
             .neighbours
@@ -58,7 +64,7 @@ pub fn pair_kernels_and_volumes<const D: usize>(sys: &System<D>) -> (Vec<PairKer
 
 /// [`pair_kernels_and_volumes`] without the volumes.
 pub fn pair_kernels<const D: usize>(sys: &System<D>) -> Vec<PairKernel> {
-    pair_kernels_and_volumes(sys).0
+    pair_kernels_and_volumes(sys, Vec::new()).0
 }
 
 /// One row's Σ_j W(x_ij, h_i) (self included) and its pair slots.
