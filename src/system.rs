@@ -300,12 +300,23 @@ impl<const D: usize> System<D> {
     ) {
         let t0 = std::time::Instant::now();
         let old = std::mem::take(&mut self.neighbours);
-        let mut scratch = std::mem::take(&mut self.scratch);
-        self.neighbours = cut::cut(self, out, visitor, old, &mut scratch);
-        self.scratch = scratch;
+        self.neighbours =
+            self.with_scratch(|sys, scratch| cut::cut(sys, out, visitor, old, scratch));
         let dt = t0.elapsed().as_secs_f64();
         self.stats.seconds_neighbours += dt;
         self.stats.seconds_cut += dt;
+    }
+
+    /// `pass(self, scratch)` with the store of kept arrays ([`crate::scratch`]) lent apart from
+    /// the rest of the system, so a pass that reads the system can take and keep its arrays.
+    pub fn with_scratch<R>(
+        &mut self,
+        pass: impl FnOnce(&Self, &mut crate::scratch::Scratch) -> R,
+    ) -> R {
+        let mut scratch = std::mem::take(&mut self.scratch);
+        let r = pass(self, &mut scratch);
+        self.scratch = scratch;
+        r
     }
 
     /// Reorder the particles (new index i = old index `perm[i]`) and carry the master list,

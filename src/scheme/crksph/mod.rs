@@ -252,17 +252,17 @@ impl<const D: usize> Scheme<D> for Crksph<D> {
         let t0 = std::time::Instant::now();
         let mut work = std::mem::take(&mut self.work);
         work.reset(sys);
-        let mut scratch = std::mem::take(&mut sys.scratch);
-        let out = CrkMomentum {
-            sys,
-            vol: &vol,
-            coef: &coef,
-            kern: &kern,
-            grads: &grads,
-            visc: self.visc,
-        }
-        .run(&mut work.acc, &mut scratch);
-        sys.scratch = scratch;
+        let out = sys.with_scratch(|sys, scratch| {
+            CrkMomentum {
+                sys,
+                vol: &vol,
+                coef: &coef,
+                kern: &kern,
+                grads: &grads,
+                visc: self.visc,
+            }
+            .run(&mut work.acc, scratch)
+        });
         sys.scratch.keep(kern);
         self.work = work;
         paper_step::store(sys, t0, &out);

@@ -167,16 +167,16 @@ impl<const D: usize> Scheme<D> for Psph<D> {
         let t0 = std::time::Instant::now();
         let mut work = std::mem::take(&mut self.work);
         work.reset(sys);
-        let mut scratch = std::mem::take(&mut sys.scratch);
-        let out = force::PsphForce {
-            sys,
-            fcoef: &self.fcoef,
-            gamma: self.gamma,
-            visc: self.visc,
-            alpha_c: self.params.conductivity,
-        }
-        .run(&mut work.acc, &mut scratch);
-        sys.scratch = scratch;
+        let out = sys.with_scratch(|sys, scratch| {
+            force::PsphForce {
+                sys,
+                fcoef: &self.fcoef,
+                gamma: self.gamma,
+                visc: self.visc,
+                alpha_c: self.params.conductivity,
+            }
+            .run(&mut work.acc, scratch)
+        });
         work.exchange = out.iter().map(|o| o.exchange).collect();
         self.work = work;
         paper_step::store(sys, t0, &out);
