@@ -14,6 +14,7 @@
 //! total energy is conserved in continuous time and pairwise antisymmetry keeps momentum
 //! exact. Angular momentum is not exact with IA (G_a is not along r_ab; Rosswog (2015) Eqs. 16–25).
 
+mod force;
 pub mod gradients;
 pub mod sr;
 pub mod triggers;
@@ -360,16 +361,10 @@ pub(crate) fn density_and_pressure<const D: usize>(
 /// 3 of the 2D Noh problem). Here the kinetic energy the pair loses,
 /// m_a m_b Π v_ab·D_ab, heats both particles equally, so energy is conserved pair by pair and
 /// only relative velocities enter.
+/// Here `e_dot_d` = ê·D_ab and `v_dot_d` = v_ab·D_ab.
 #[inline(always)]
-fn dissipative_heating<const D: usize>(
-    kv: f64,
-    pi: f64,
-    du_ab: f64,
-    vab: &Vector<D>,
-    e: &Vector<D>,
-    dab: &Vector<D>,
-) -> f64 {
-    kv * du_ab * e.dot(dab) + 0.5 * pi * vab.dot(dab)
+fn dissipative_heating(kv: f64, pi: f64, du_ab: f64, e_dot_d: f64, v_dot_d: f64) -> f64 {
+    kv * du_ab * e_dot_d + 0.5 * pi * v_dot_d
 }
 
 /// The IA matrices of every particle (and the fIA ∇·v the triggers read), with their time
@@ -412,44 +407,6 @@ pub(crate) fn pair_gradient<const D: usize>(
     }
 }
 
-/// What the pair loop reads of one particle.
-#[derive(Clone, Copy)]
-struct Rec<const D: usize> {
-    x: Vector<D>,
-    v: Vector<D>,
-    m: f64,
-    h: f64,
-    /// X_a
-    xw: f64,
-    /// A_a = P_a V_a² / (Ω_a X_a)
-    a: f64,
-    rho: f64,
-    c: f64,
-    u: f64,
-    k: f64,
-}
-
-#[derive(Clone, Copy)]
-struct Acc<const D: usize> {
-    dv: Vector<D>,
-    du_hydro: f64,
-    dv_diss: Vector<D>,
-    du_diss: f64,
-    vsig: f64,
-}
-
-impl<const D: usize> Default for Acc<D> {
-    fn default() -> Self {
-        Self {
-            dv: Vector::zeros(),
-            du_hydro: 0.0,
-            dv_diss: Vector::zeros(),
-            du_diss: 0.0,
-            vsig: 0.0,
-        }
-    }
-}
-
 impl<const D: usize> Scheme<D> for Rosswog {
     fn name(&self) -> &'static str {
         match self.preset {
@@ -474,88 +431,19 @@ impl<const D: usize> Scheme<D> for Rosswog {
         let xw = self.density(sys);
         let mats = ia_matrices(sys);
         let t0 = std::time::Instant::now();
-        let n = sys.particles.len();
-        let ia = self.params.gradient == GradientOperator::IntegralApproximation;
-        let literal = self.params.signal_velocity == SignalVelocity::Literal;
-        let conduction = if self.params.conduction { 1.0 } else { 0.0 };
         // the pass's per-particle arrays, kept between steps (`crate::scratch`)
-        let mut recs: Vec<Rec<D>> = sys.scratch.take();
-        let mut out: Vec<Acc<D>> = sys.scratch.take();
-        out.resize(n, Acc::default());
-        let p = &sys.particles;
-        (0..n)
-            .into_par_iter()
-            .map(|a| {
-                let v = p.mass[a] / p.rho[a];
-                let om = if ia { 1.0 } else { p.omega[a] };
-                Rec {
-                    x: p.pos[a],
-                    v: p.vel[a],
-                    m: p.mass[a],
-                    h: p.h[a],
-                    xw: xw[a],
-                    a: p.pressure[a] * v * v / (om * xw[a]),
-                    rho: p.rho[a],
-                    c: p.sound_speed[a],
-                    u: p.u[a],
-                    k: p.alpha[a],
-                }
-            })
-            .collect_into_vec(&mut recs);
-        let k = &sys.kernel;
-        let grad = |i: usize, r: &Rec<D>, dx: &Vector<D>, dist: f64, code: u8| -> Vector<D> {
-            pair_gradient(k, ia, &mats[i], r.h, dx, dist, code)
-        };
-        sys.gather_with(
-            |i| (recs[i].x, recs[i].v),
-            &mut out,
-            |a, o, pr| {
-                if pr.r <= 0.0 || sys.wall_pair(a, pr.b) {
-                    return;
-                }
-                let (ra, rb) = (&recs[a], &recs[pr.b]);
-                let ga = grad(a, ra, &pr.dx, pr.r, 0);
-                let gb = grad(pr.b, rb, &pr.dx, pr.r, pr.code);
-                // hydro (Eqs. 55/61 or 64/65), without the 1/m_a factor
-                o.dv -= ga * (ra.a * rb.xw) + gb * (rb.a * ra.xw);
-                let vab = ra.v - pr.vb;
-                o.du_hydro += rb.xw * vab.dot(&ga);
-                let e = pr.dx / pr.r;
-                let w = vab.dot(&e);
-                let vsig = if literal {
-                    (ra.c + ra.v.dot(&e).abs()).max(rb.c + pr.vb.dot(&e).abs())
-                } else {
-                    ra.c.max(rb.c) - w.min(0.0)
-                };
-                o.vsig = o.vsig.max(vsig);
-                // "Approaching" (Rosswog (2015) Sec. 6.3: v_ab·r_ab < 0) beyond round-off: without this margin a
-                // static state's ±1e-16 velocities switch on the e* conduction term — which does
-                // not scale with w — across every density jump (our decision; the paper is silent).
-                if w < -APPROACH_TOLERANCE * ra.c.max(rb.c) {
-                    // Newtonian Chow–Monaghan dissipation (Rosswog (2015) Sec. 6.3) with D_ab = ½(g_a + g_b).
-                    let dab = (ga + gb) * 0.5;
-                    let kab = 0.5 * (ra.k + rb.k);
-                    let rho_bar = 0.5 * (ra.rho + rb.rho);
-                    let pi = -kab * vsig * w / rho_bar;
-                    o.dv_diss -= dab * (rb.m * pi);
-                    o.du_diss += rb.m
-                        * dissipative_heating(
-                            kab * vsig / rho_bar,
-                            pi,
-                            conduction * (ra.u - rb.u),
-                            &vab,
-                            &e,
-                            &dab,
-                        );
-                }
-            },
-        );
-        sys.store_derivatives(t0, |a| {
-            let (o, m) = (&out[a], recs[a].m);
-            // du/dt = (A_a/m_a) Σ X_b v_ab·g_a (Rosswog (2015) §6.2/6.3, u-form) + the heating
-            let du = recs[a].a / m * o.du_hydro + o.du_diss;
-            (o.dv / m + o.dv_diss, du, o.vsig)
-        });
+        let mut recs: Vec<force::Rec<D>> = sys.scratch.take();
+        let mut out: Vec<force::Acc<D>> = sys.scratch.take();
+        force::RosswogForce {
+            sys,
+            xw: &xw,
+            mats: &mats,
+            ia: self.params.gradient == GradientOperator::IntegralApproximation,
+            literal: self.params.signal_velocity == SignalVelocity::Literal,
+            conduction: if self.params.conduction { 1.0 } else { 0.0 },
+        }
+        .run(&mut recs, &mut out);
+        sys.store_derivatives(t0, |a| force::derivatives(&recs[a], &out[a]));
         sys.scratch.keep(recs);
         sys.scratch.keep(out);
         Ok(())
