@@ -108,23 +108,8 @@ pub fn invert<const D: usize>(tau: &SMatrix<f64, D, D>) -> Option<SMatrix<f64, D
 pub fn ia_pass<const D: usize>(
     sys: &mut System<D>,
 ) -> (Vec<IaMatrix<D>>, Vec<SMatrix<f64, D, D>>, u64) {
-    let n = sys.particles.len();
-    let mut acc = vec![(SMatrix::<f64, D, D>::zeros(), SMatrix::<f64, D, D>::zeros()); n];
-    {
-        let p = &sys.particles;
-        let k = &sys.kernel;
-        sys.gather(&mut acc, |a, (tau, iv), pr| {
-            let w = k.w(pr.r, p.h[a]);
-            if w == 0.0 {
-                return;
-            }
-            let vb = p.mass[pr.b] / p.rho[pr.b];
-            let d: Vector<D> = -pr.dx; // r_b − r_a
-            *tau += (vb * w) * d * d.transpose();
-            // I^{i d} = Σ V_b (v_b − v_a)^i (r_b − r_a)^d W
-            *iv += (vb * w) * (pr.vb - p.vel[a]) * d.transpose();
-        });
-    }
+    let mut acc = Vec::new();
+    super::ia_sums::ia_sums(sys, &mut acc);
     sys.stats.total_pairs += sys.neighbours.total_pairs() as u64;
     let out: Vec<(IaMatrix<D>, SMatrix<f64, D, D>)> = acc
         .par_iter()

@@ -16,6 +16,7 @@
 
 mod force;
 pub mod gradients;
+mod ia_sums;
 pub mod sr;
 pub mod triggers;
 
