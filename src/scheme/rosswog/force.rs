@@ -288,14 +288,14 @@ fn dot<const D: usize>(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 }
 
 /// M·x in nalgebra's order (its `gemv`: column by column, y = M_r0 x_0, then
-/// y = M_rs x_s + y).
+/// y = M_rs x_s + y, which is y + M_rs x_s to the bit).
 #[inline(always)]
 fn mat_vec<const D: usize>(m: &[[f64; 3]; 3], x: &[f64; 3]) -> [f64; 3] {
     let mut y = [0.0; 3];
     for r in 0..D {
         y[r] = m[r][0] * x[0];
         for s in 1..D {
-            y[r] = m[r][s] * x[s] + y[r];
+            y[r] += m[r][s] * x[s];
         }
     }
     y
