@@ -195,7 +195,7 @@ struct PairTerms {
     vsig: [f64; LANES],
 }
 
-/// A thread's blocks (boxed: about 14 KB).
+/// A thread's blocks (boxed: about 10 KB).
 #[derive(Default)]
 struct Scratch(Box<(PairBlock, PairTerms)>);
 

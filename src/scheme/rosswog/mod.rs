@@ -30,6 +30,10 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Relative approach speed (in units of the sound speed) below which a pair counts as at rest.
+///
+/// Our decision (the paper is silent): Rosswog (2015) Sec. 6.3 dissipates "approaching" pairs,
+/// v_ab·r_ab < 0. Without a margin, a static state's ±1e-16 velocities switch on the e*
+/// conduction term, which does not scale with the approach speed, across every density jump.
 pub const APPROACH_TOLERANCE: f64 = 1e-9;
 
 /// Volume weight X of V_a = X_a / Σ_b X_b W_ab(h_a).
