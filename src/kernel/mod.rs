@@ -300,6 +300,33 @@ impl<const D: usize, K: Kernel + Copy> DimKernel<D, K> {
         self.sigma * Self::hinv_pow(h) * hinv * self.kernel.shape(q).1
     }
 
+    /// [`Self::w`] to the bit (q = r/h), with its factor σ/h^D = `norm(1/h)` computed once
+    /// per particle by the caller and a select in place of the early return, for lane
+    /// passes that must reproduce `w`'s bits (Rosswog's force pass and IA sums).
+    #[inline(always)]
+    pub fn w_normed(&self, r: f64, h: f64, norm: f64) -> f64 {
+        let q = r / h;
+        let w = norm * self.kernel.shape(q).0;
+        if q >= SUPPORT {
+            0.0
+        } else {
+            w
+        }
+    }
+
+    /// [`Self::dwdr`] to the bit (q = r·(1/h)), with its factor σ/h^(D+1) = `norm(1/h)·(1/h)`
+    /// computed once per particle by the caller (see [`Self::w_normed`]).
+    #[inline(always)]
+    pub fn dwdr_normed(&self, r: f64, hinv: f64, norm_hinv: f64) -> f64 {
+        let q = r * hinv;
+        let dw = norm_hinv * self.kernel.shape(q).1;
+        if q >= SUPPORT {
+            0.0
+        } else {
+            dw
+        }
+    }
+
     /// W(r, h) with a precomputed 1/h (no division in the pair loop).
     #[inline(always)]
     pub fn w_hinv(&self, r: f64, hinv: f64) -> f64 {

@@ -15,7 +15,7 @@
 
 use super::gradients::{reflect, IaMatrix};
 use super::{dissipative_heating, APPROACH_TOLERANCE};
-use crate::kernel::{DimKernel, Kernel, KernelVisitor, SUPPORT};
+use crate::kernel::{DimKernel, Kernel, KernelVisitor};
 use crate::neighbours::lanes::{
     fill_pair, finish_pairs, for_each_row, pad_separations, RowPass, LANES,
 };
@@ -104,7 +104,7 @@ impl<const D: usize> RosswogForce<'_, D> {
                 let ia = self.ia && !self.mats[a].fallback;
                 let (h, xw) = (p.h[a], self.xw[a]);
                 let hinv = 1.0 / h;
-                // the factors of `DimKernel::w` and `dwdr`, to the bit
+                // the factors of `DimKernel::w_normed` and `dwdr_normed`
                 let wnorm = kernel.norm(hinv);
                 Rec {
                     x: p.pos[a],
@@ -148,7 +148,7 @@ impl<const D: usize> KernelVisitor<D> for Visit<'_, D> {
         let rows = Rows {
             pass: self.pass,
             recs: self.recs,
-            kernel: kernel.kernel,
+            kernel: *kernel,
         };
         for_each_row(&rows, self.out);
     }
@@ -157,7 +157,7 @@ impl<const D: usize> KernelVisitor<D> for Visit<'_, D> {
 struct Rows<'a, const D: usize, K> {
     pass: &'a RosswogForce<'a, D>,
     recs: &'a [Rec<D>],
-    kernel: K,
+    kernel: DimKernel<D, K>,
 }
 
 /// A block of up to [`LANES`] pairs: separation, v_ab, image(v_b), b's matrix (row-major) and
@@ -319,30 +319,6 @@ fn kernel_gradient(dx: &[f64; 3], dwdr: f64, r: f64) -> [f64; 3] {
 }
 
 impl<const D: usize, K: Kernel + Copy> Rows<'_, D, K> {
-    /// W(r, h) as `DimKernel::w` computes it (q = r/h).
-    #[inline(always)]
-    fn w(&self, r: f64, h: f64, wnorm: f64) -> f64 {
-        let q = r / h;
-        let w = wnorm * self.kernel.shape(q).0;
-        if q >= SUPPORT {
-            0.0
-        } else {
-            w
-        }
-    }
-
-    /// ∂W/∂r as `DimKernel::dwdr` computes it (q = r·(1/h)).
-    #[inline(always)]
-    fn dwdr(&self, r: f64, hinv: f64, dnorm: f64) -> f64 {
-        let q = r * hinv;
-        let dw = dnorm * self.kernel.shape(q).1;
-        if q >= SUPPORT {
-            0.0
-        } else {
-            dw
-        }
-    }
-
     /// The pair terms of one block, one pair per lane, selects only (so the loop becomes
     /// SIMD). `MODE` says which gradients the block's particles take ([`IA_ONLY`],
     /// [`KERNEL_ONLY`] or [`MIXED`]). Per pair, as in `super::pair_gradient`:
@@ -354,6 +330,7 @@ impl<const D: usize, K: Kernel + Copy> Rows<'_, D, K> {
     fn terms<const MODE: u8>(&self, ra: &Rec<D>, b: &PairBlock, out: &mut PairTerms, lanes: usize) {
         // Row constants as values, so that the loop does not reread them through references.
         let ra = *ra;
+        let k = self.kernel;
         let literal = self.pass.literal;
         let conduction = self.pass.conduction;
         let mut ca = [[0.0; 3]; 3];
@@ -389,14 +366,14 @@ impl<const D: usize, K: Kernel + Copy> Rows<'_, D, K> {
                     }
                 }
                 (
-                    ia_gradient::<D>(&ca, &minus_dx, self.w(r, ra.h, ra.wnorm)),
-                    ia_gradient::<D>(&cb, &minus_dx, self.w(r, b.h[i], b.wnorm[i])),
+                    ia_gradient::<D>(&ca, &minus_dx, k.w_normed(r, ra.h, ra.wnorm)),
+                    ia_gradient::<D>(&cb, &minus_dx, k.w_normed(r, b.h[i], b.wnorm[i])),
                 )
             };
             let kernel_pair = || {
                 (
-                    kernel_gradient(&dx, self.dwdr(r, ra.hinv, ra.dnorm), r),
-                    kernel_gradient(&dx, self.dwdr(r, b.hinv[i], b.dnorm[i]), r),
+                    kernel_gradient(&dx, k.dwdr_normed(r, ra.hinv, ra.dnorm), r),
+                    kernel_gradient(&dx, k.dwdr_normed(r, b.hinv[i], b.dnorm[i]), r),
                 )
             };
             let (ga, gb) = match MODE {

@@ -8,7 +8,7 @@
 //! product gives it), and the sums run in list order, so τ and I are the same bits (the
 //! snapshots of F1–F4 and SR runs compared byte for byte, BENCHMARKS.md, issue 19).
 
-use crate::kernel::{DimKernel, Kernel, KernelVisitor, SUPPORT};
+use crate::kernel::{DimKernel, Kernel, KernelVisitor};
 use crate::neighbours::lanes::{
     fill_pair, finish_pairs, for_each_row, pad_separations, RowPass, LANES,
 };
@@ -154,13 +154,7 @@ impl<const D: usize, K: Kernel + Copy> Rows<'_, D, K> {
                 _ => d[0] * d[0] + d[1] * d[1] + d[2] * d[2],
             };
             let r = r2.sqrt();
-            // W(r, h) as `DimKernel::w` computes it (q = r/h)
-            let q = r / h;
-            let w = if q >= SUPPORT {
-                0.0
-            } else {
-                wnorm * self.kernel.kernel.shape(q).0
-            };
+            let w = self.kernel.w_normed(r, h, wnorm);
             let s = b.vol[i] * w;
             for r in 0..D {
                 let (sd, sv) = (s * d[r], s * dv[r]);
