@@ -108,8 +108,7 @@ pub fn invert<const D: usize>(tau: &SMatrix<f64, D, D>) -> Option<SMatrix<f64, D
 pub fn ia_pass<const D: usize>(
     sys: &mut System<D>,
 ) -> (Vec<IaMatrix<D>>, Vec<SMatrix<f64, D, D>>, u64) {
-    let mut acc = Vec::new();
-    super::ia_sums::ia_sums(sys, &mut acc);
+    let acc = super::ia_sums::ia_sums(sys);
     sys.stats.total_pairs += sys.neighbours.total_pairs() as u64;
     let out: Vec<(IaMatrix<D>, SMatrix<f64, D, D>)> = acc
         .par_iter()

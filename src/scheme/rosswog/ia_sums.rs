@@ -31,8 +31,8 @@ struct Rec<const D: usize> {
     vol: f64,
 }
 
-/// τ_a and I_a of every particle into `out` (resized to the particle count).
-pub fn ia_sums<const D: usize>(sys: &System<D>, out: &mut Vec<IaSums<D>>) {
+/// τ_a and I_a of every particle.
+pub fn ia_sums<const D: usize>(sys: &System<D>) -> Vec<IaSums<D>> {
     let p = &sys.particles;
     let recs: Vec<Rec<D>> = (0..p.len())
         .into_par_iter()
@@ -43,13 +43,13 @@ pub fn ia_sums<const D: usize>(sys: &System<D>, out: &mut Vec<IaSums<D>>) {
             vol: p.mass[b] / p.rho[b],
         })
         .collect();
-    out.clear();
-    out.resize(p.len(), (SMatrix::zeros(), SMatrix::zeros()));
+    let mut out = vec![(SMatrix::zeros(), SMatrix::zeros()); p.len()];
     sys.kernel.visit(Visit {
         sys,
         recs: &recs,
-        out,
+        out: &mut out,
     });
+    out
 }
 
 struct Visit<'a, const D: usize> {
