@@ -146,13 +146,9 @@ impl<const D: usize, K: Kernel + Copy> Rows<'_, D, K> {
             for k in 0..D {
                 d[k] = -b.dx[k][i];
                 dv[k] = -b.vab[k][i];
+                // |x_ab|² summed from zero in axis order, as nalgebra's `norm` sums it
+                r2 += d[k] * d[k];
             }
-            // |x_ab|² in nalgebra's order (its `norm`: a sum from zero, written out for 2, 3)
-            r2 += match D {
-                1 => 0.0 + d[0] * d[0],
-                2 => d[0] * d[0] + d[1] * d[1],
-                _ => d[0] * d[0] + d[1] * d[1] + d[2] * d[2],
-            };
             let r = r2.sqrt();
             let w = self.kernel.w_normed(r, h, wnorm);
             let s = b.vol[i] * w;
