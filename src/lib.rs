@@ -12,6 +12,7 @@ pub mod eos;
 pub mod integrate;
 pub mod io;
 pub mod kernel;
+mod monomorphic;
 pub mod neighbours;
 pub mod parallel;
 pub mod particles;

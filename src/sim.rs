@@ -248,7 +248,17 @@ impl<const D: usize> Simulation<D> {
     /// [`Self::step`] with the stability limit already computed.
     /// `stable` comes with whether the scheme's own limit set it (counted in the stats when
     /// the step is that long).
+    /// Compiled in this crate once per dimension (`crate::monomorphic`).
     fn step_with(&mut self, stable: (f64, bool), dt_cap: f64) -> Result<f64, SolverError> {
+        crate::monomorphic::step_with(self, stable, dt_cap)
+    }
+
+    /// [`Self::step_with`]'s work, generic over D.
+    pub(crate) fn step_with_generic(
+        &mut self,
+        stable: (f64, bool),
+        dt_cap: f64,
+    ) -> Result<f64, SolverError> {
         let (stable, by_scheme) = stable;
         if by_scheme && stable <= dt_cap {
             self.sys.stats.steps_set_by_scheme += 1;
@@ -375,7 +385,13 @@ impl<const D: usize> Simulation<D> {
 
     /// Evaluate the derivatives again at the current state (after an input changed: gravity,
     /// or the pose of an externally driven body, whose walls are placed first).
+    /// Compiled in this crate once per dimension (`crate::monomorphic`).
     pub fn reevaluate(&mut self) -> Result<(), SolverError> {
+        crate::monomorphic::reevaluate(self)
+    }
+
+    /// [`Self::reevaluate`]'s work, generic over D.
+    pub(crate) fn reevaluate_generic(&mut self) -> Result<(), SolverError> {
         self.sys.place_bodies(self.time);
         self.sys.time = self.time;
         self.sys

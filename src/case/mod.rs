@@ -404,8 +404,14 @@ impl Case {
             .count() as u16
     }
 
-    /// The particles, box, kernel and EOS of this case in dimension D, before any evaluation.
+    /// The particles, box, kernel and EOS of this case in dimension D, before any evaluation
+    /// (compiled in this crate once per dimension: `crate::monomorphic`).
     pub fn system<const D: usize>(&self) -> Result<System<D>, CaseError> {
+        crate::monomorphic::system(self)
+    }
+
+    /// [`Self::system`]'s work, generic over D.
+    pub(crate) fn system_generic<const D: usize>(&self) -> Result<System<D>, CaseError> {
         if D != self.case.dimension {
             return Err(CaseError(format!(
                 "case.dimension = {} but built in {D}D",

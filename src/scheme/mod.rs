@@ -161,7 +161,14 @@ impl SchemeConfig {
             }
         }
     }
+    /// The scheme this configuration names, in dimension D (compiled in this crate once per
+    /// dimension: `crate::monomorphic`).
     pub fn build<const D: usize>(&self) -> Box<dyn Scheme<D>> {
+        crate::monomorphic::scheme(self)
+    }
+
+    /// [`Self::build`]'s work, generic over D.
+    pub(crate) fn build_generic<const D: usize>(&self) -> Box<dyn Scheme<D>> {
         match *self {
             SchemeConfig::Standard(p) => Box::new(standard::StandardSph::new(p)),
             SchemeConfig::Rpsph(p) => Box::new(rpsph::build(p)),
