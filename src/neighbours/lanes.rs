@@ -120,8 +120,14 @@ pub fn for_each_row<P: RowPass>(pass: &P, out: &mut [P::Acc]) {
     for_each_row_at(Width::detect(), pass, out)
 }
 
+/// [`for_each_row`] with AVX-512 where the CPU has it ([`Widest`]): for the force passes,
+/// whose pair arithmetic is the heaviest of a step.
+pub fn for_each_row_widest<P: RowPass>(pass: &P, out: &mut [P::Acc]) {
+    for_each_row_at(Widest::detect(), pass, out)
+}
+
 /// [`for_each_row`] at a given width.
-fn for_each_row_at<P: RowPass>(wide: Width, pass: &P, out: &mut [P::Acc]) {
+fn for_each_row_at<P: RowPass>(wide: impl Runs, pass: &P, out: &mut [P::Acc]) {
     out.par_iter_mut()
         .enumerate()
         .with_min_len(64)
@@ -158,6 +164,11 @@ pub trait Wide {
     fn run(self) -> Self::Output;
 }
 
+/// Runs [`Wide`] work compiled for a width chosen at run time.
+pub trait Runs: Copy + Send + Sync {
+    fn run<W: Wide>(self, work: W) -> W::Output;
+}
+
 /// The vector width the CPU offers, decided once per pass.
 #[derive(Clone, Copy)]
 pub enum Width {
@@ -187,6 +198,62 @@ impl Width {
             Width::Avx2 => unsafe { run_avx2(work) },
         }
     }
+}
+
+impl Runs for Width {
+    #[inline(always)]
+    fn run<W: Wide>(self, work: W) -> W::Output {
+        Width::run(self, work)
+    }
+}
+
+/// [`Width`], or AVX-512 (F, DQ and VL) where the CPU has it. Only the force passes take it:
+/// every pass run through it is compiled once more per kernel and dimension, and the others
+/// did not gain. Zen 4 executes AVX-512 on 256-bit units, so the gain is in the registers (32
+/// instead of 16: the force terms of a block no longer spill) and the masks, not the width.
+/// On `models/bench/sod3d.toml` to t = 0.05 the standard force pass took 8–18 % less time,
+/// the cut took more (BENCHMARKS.md, 2026-12-07 and 12-08). The results are the same bits
+/// as at the other widths: nothing is contracted into an FMA, and division and square root
+/// are exactly rounded at every width.
+#[derive(Clone, Copy)]
+pub enum Widest {
+    Lanes(Width),
+    #[cfg(target_arch = "x86_64")]
+    Avx512,
+}
+
+impl Widest {
+    pub fn detect() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::is_x86_feature_detected!("avx512f")
+                && std::is_x86_feature_detected!("avx512dq")
+                && std::is_x86_feature_detected!("avx512vl")
+            {
+                return Widest::Avx512;
+            }
+        }
+        Widest::Lanes(Width::detect())
+    }
+}
+
+impl Runs for Widest {
+    #[inline(always)]
+    fn run<W: Wide>(self, work: W) -> W::Output {
+        match self {
+            Widest::Lanes(w) => w.run(work),
+            // SAFETY: `detect` found AVX-512 F, DQ and VL on this CPU.
+            #[cfg(target_arch = "x86_64")]
+            Widest::Avx512 => unsafe { run_avx512(work) },
+        }
+    }
+}
+
+/// [`Wide::run`] compiled for AVX-512 (the work inlines into it).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,avx512f,avx512dq,avx512vl")]
+unsafe fn run_avx512<W: Wide>(work: W) -> W::Output {
+    work.run()
 }
 
 /// [`Wide::run`] compiled for AVX2 (the work inlines into it).
@@ -311,11 +378,14 @@ mod tests {
         let pass = KernelTerms { x: &x, rows: &rows };
         let mut base = vec![0.0; n];
         for_each_row_at(Width::Baseline, &pass, &mut base);
+        assert!(base.iter().any(|&v| v != 0.0));
         let mut wide = vec![0.0; n];
         for_each_row_at(Width::detect(), &pass, &mut wide);
-        assert!(base.iter().any(|&v| v != 0.0));
+        let mut widest = vec![0.0; n];
+        for_each_row_at(Widest::detect(), &pass, &mut widest);
         for a in 0..n {
             assert_eq!(base[a].to_bits(), wide[a].to_bits(), "row {a}");
+            assert_eq!(base[a].to_bits(), widest[a].to_bits(), "row {a}");
         }
     }
 

@@ -11,7 +11,7 @@
 use super::StandardParams;
 use crate::kernel::{DimKernel, Kernel, KernelVisitor};
 use crate::neighbours::lanes::{
-    fill_pair, finish_pairs, for_each_row, pad_separations, RowPass, LANES,
+    fill_pair, finish_pairs, for_each_row_widest, pad_separations, RowPass, LANES,
 };
 use crate::neighbours::unpack;
 use crate::particles::Vector;
@@ -201,9 +201,9 @@ impl<const D: usize> KernelVisitor<D> for ForceVisit<'_, D> {
     fn visit<K: Kernel + Copy>(mut self, kernel: &DimKernel<D, K>) {
         let out = std::mem::take(&mut self.out);
         if self.plain {
-            for_each_row(&ForceRows::<D, K, true> { v: &self, kernel }, out);
+            for_each_row_widest(&ForceRows::<D, K, true> { v: &self, kernel }, out);
         } else {
-            for_each_row(&ForceRows::<D, K, false> { v: &self, kernel }, out);
+            for_each_row_widest(&ForceRows::<D, K, false> { v: &self, kernel }, out);
         }
     }
 }
