@@ -21,7 +21,9 @@ use super::pair_kernels::PairKernel;
 use super::reproducing::RkCoefficients;
 use super::viscosity::ViscosityParams;
 use crate::kernel::SUPPORT;
-use crate::neighbours::lanes::{fill_pair, finish_pairs, for_each_row, padded, RowPass, LANES};
+use crate::neighbours::lanes::{
+    fill_pair, finish_pairs, for_each_row_widest, padded, RowPass, LANES,
+};
 use crate::neighbours::unpack;
 use crate::particles::Vector;
 use crate::scheme::rosswog::gradients::reflect;
@@ -91,7 +93,7 @@ impl<const D: usize> CrkMomentum<'_, D> {
             recs: &recs,
             _slots: PhantomData,
         };
-        for_each_row(&rows, &mut out);
+        for_each_row_widest(&rows, &mut out);
         scratch.keep(recs);
         PairRow::sums(out)
     }

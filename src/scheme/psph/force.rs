@@ -15,7 +15,7 @@ use super::super::crksph::viscosity::ViscosityParams;
 use super::super::paper_step::{PairRow, PairSums};
 use crate::kernel::{DimKernel, Kernel, KernelVisitor, SUPPORT};
 use crate::neighbours::lanes::{
-    fill_pair, finish_pairs, for_each_row, pad_separations, RowPass, LANES,
+    fill_pair, finish_pairs, for_each_row_widest, pad_separations, RowPass, LANES,
 };
 use crate::neighbours::unpack;
 use crate::particles::Vector;
@@ -120,7 +120,7 @@ impl<'s, const D: usize> KernelVisitor<D> for Visit<'_, 's, D> {
             kernel: *kernel,
             _slots: PhantomData,
         };
-        for_each_row(&rows, self.out);
+        for_each_row_widest(&rows, self.out);
     }
 }
 
