@@ -248,6 +248,7 @@ impl<const D: usize> Simulation<D> {
     /// [`Self::step`] with the stability limit already computed.
     /// `stable` comes with whether the scheme's own limit set it (counted in the stats when
     /// the step is that long).
+    ///
     /// Compiled in this crate once per dimension (`crate::monomorphic`).
     fn step_with(&mut self, stable: (f64, bool), dt_cap: f64) -> Result<f64, SolverError> {
         crate::monomorphic::step_with(self, stable, dt_cap)
@@ -385,6 +386,7 @@ impl<const D: usize> Simulation<D> {
 
     /// Evaluate the derivatives again at the current state (after an input changed: gravity,
     /// or the pose of an externally driven body, whose walls are placed first).
+    ///
     /// Compiled in this crate once per dimension (`crate::monomorphic`).
     pub fn reevaluate(&mut self) -> Result<(), SolverError> {
         crate::monomorphic::reevaluate(self)

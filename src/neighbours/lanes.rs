@@ -209,8 +209,9 @@ impl Runs for Width {
 
 /// [`Width`], or AVX-512 (F, DQ and VL) where the CPU has it. Only the force passes of
 /// standard SPH, PSPH and CRKSPH take it: every pass run through it is compiled once more per
-/// kernel and dimension, and the others (Rosswog's force pass among them) did not gain. Zen 4 executes AVX-512 on 256-bit units, so the gain is in the registers (32
-/// instead of 16: the force terms of a block no longer spill) and the masks, not the width.
+/// kernel and dimension, and the others (Rosswog's force pass among them) did not gain.
+/// Zen 4 executes AVX-512 on 256-bit units, so the gain is in the registers (32 instead of
+/// 16: the force terms of a block no longer spill) and the masks, not the width.
 /// On `models/bench/sod3d.toml` to t = 0.05 the standard force pass took 8–18 % less time,
 /// the cut took more (BENCHMARKS.md, 2026-12-07 and 12-08). The results are the same bits
 /// as at the other widths: nothing is contracted into an FMA, and division and square root
