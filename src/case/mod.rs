@@ -407,17 +407,18 @@ impl Case {
     /// The particles, box, kernel and EOS of this case in dimension D, before any evaluation
     /// (compiled in this crate once per dimension: `crate::monomorphic`).
     pub fn system<const D: usize>(&self) -> Result<System<D>, CaseError> {
-        crate::monomorphic::system(self)
-    }
-
-    /// [`Self::system`]'s work, generic over D.
-    pub(crate) fn system_generic<const D: usize>(&self) -> Result<System<D>, CaseError> {
+        // checked before the dispatch, so that any other D is this error, not a panic
         if D != self.case.dimension {
             return Err(CaseError(format!(
                 "case.dimension = {} but built in {D}D",
                 self.case.dimension
             )));
         }
+        crate::monomorphic::system(self)
+    }
+
+    /// [`Self::system`]'s work, generic over D (which [`Self::system`] checked).
+    pub(crate) fn system_generic<const D: usize>(&self) -> Result<System<D>, CaseError> {
         // the size first: nothing is allocated for a case that cannot fit
         self.check_resources(&self.limits)?;
         let mut lo = [0.0; D];
