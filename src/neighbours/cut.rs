@@ -14,7 +14,7 @@
 //! terms are now computed for the dropped third of the entries too. The plain cut
 //! ([`NoVisit`]) also fills v_ab and m_b, which only a visitor reads.
 
-use super::lanes::{fill_pair, finish_pairs, padded, Wide, Width, LANES};
+use super::lanes::{fill_pair, finish_pairs, padded, Runs, Wide, Width, LANES};
 use super::{unpack, NeighbourList};
 use crate::particles::Vector;
 use crate::scratch::Scratch;

@@ -187,23 +187,18 @@ impl Width {
         }
         Width::Baseline
     }
+}
 
+impl Runs for Width {
     /// `work.run()`, compiled for this width.
     #[inline(always)]
-    pub fn run<W: Wide>(self, work: W) -> W::Output {
+    fn run<W: Wide>(self, work: W) -> W::Output {
         match self {
             Width::Baseline => work.run(),
             // SAFETY: `detect` found AVX2 on this CPU.
             #[cfg(target_arch = "x86_64")]
             Width::Avx2 => unsafe { run_avx2(work) },
         }
-    }
-}
-
-impl Runs for Width {
-    #[inline(always)]
-    fn run<W: Wide>(self, work: W) -> W::Output {
-        Width::run(self, work)
     }
 }
 
