@@ -313,8 +313,8 @@ fn a_driven_region_names_its_bad_expression() {
 fn a_case_built_in_another_dimension_is_an_error() {
     let case = Case::parse(SOD).expect("sod.toml parses");
     for e in [
-        case.system::<2>().err().expect("1D case in 2D").0,
-        case.system::<4>().err().expect("1D case in 4D").0,
+        case.system::<2>().expect_err("1D case in 2D").0,
+        case.system::<4>().expect_err("1D case in 4D").0,
         case.build::<3>().err().expect("1D case in 3D").0,
     ] {
         assert!(e.contains("case.dimension = 1 but built in"), "{e}");
